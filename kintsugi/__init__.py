@@ -1,0 +1,3 @@
+"""kintsugi: resilient robot manipulation on real MuJoCo physics."""
+
+__version__ = "0.1.0"

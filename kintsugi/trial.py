@@ -1,0 +1,117 @@
+"""A trial = task x method x variant x condition x seed -> one TrialRecord.
+
+`run_trial` never raises for a failure inside the trial: an exception or a
+diverging simulation becomes the record's `error`, so a campaign goes on.
+"""
+
+from __future__ import annotations
+
+import time
+import traceback
+from typing import Any
+
+from pydantic import Field
+
+from kintsugi.config import StrictModel
+
+
+class ReasonerSettings(StrictModel):
+    """Which reasoner backend a method uses, and how to reach it."""
+
+    backend: str = "embedded"
+    model: str | None = None
+    base_url: str | None = None
+    api_key_env: str = "OPENAI_API_KEY"
+    timeout_s: float = 60.0
+    max_retries: int = 3
+
+
+class TrialSpec(StrictModel):
+    task: str
+    method: str
+    variant: str
+    condition: str
+    seed: int
+    overrides: dict[str, Any] = Field(default_factory=dict)
+    reasoner: ReasonerSettings = ReasonerSettings()
+    video: str | None = None
+
+    @property
+    def key(self) -> str:
+        """Identity of a trial inside a campaign (resume skips keys already recorded)."""
+        return f"{self.task}/{self.method}/{self.variant}/{self.condition}/{self.seed}"
+
+
+class SkillLog(StrictModel):
+    """One execution of one skill, as the robot saw it (plus the method's verdict)."""
+
+    skill: str
+    goal: dict[str, float]
+    terminal: dict[str, float]
+    reached: bool
+    timed_out: bool = False
+    compression_limit: bool = False
+    recovery: bool = False
+    verdict: bool | None = None
+    message: str = ""
+    sim_time: float = 0.0
+
+
+class Event(StrictModel):
+    t: float
+    kind: str
+    detail: str = ""
+
+
+class TrialRecord(StrictModel):
+    key: str
+    task: str
+    method: str
+    variant: str
+    condition: str
+    seed: int
+    params: dict[str, Any] = Field(default_factory=dict)
+    success: bool = False
+    framework_success: bool = False
+    executions: dict[str, int] = Field(default_factory=dict)
+    extra_executions: dict[str, int] = Field(default_factory=dict)
+    transitions: list[tuple[str, str]] = Field(default_factory=list)
+    skills: list[SkillLog] = Field(default_factory=list)
+    events: list[Event] = Field(default_factory=list)
+    sim_time: float = 0.0
+    wall_time: float = 0.0
+    physics_steps: int = 0
+    reasoning_calls: int = 0
+    reasoning_latency_s: float = 0.0
+    reasoning_errors: int = 0
+    transcript: list[dict[str, Any]] = Field(default_factory=list)
+    error: str | None = None
+    video: str | None = None
+
+    def without_timings(self) -> dict[str, Any]:
+        """The record minus wall-clock fields: equal for equal seeds."""
+        data = self.model_dump(mode="json", exclude={"wall_time", "reasoning_latency_s"})
+        for call in data["transcript"]:
+            call.pop("latency_s", None)
+        return data
+
+
+def run_trial(spec: TrialSpec) -> TrialRecord:
+    """Run one trial; any exception becomes a recorded failed trial, never a lost one."""
+    from kintsugi.tasks import TASKS
+
+    start = time.perf_counter()
+    try:
+        task = TASKS.get(spec.task).factory()
+        record = task.run(spec)
+    except Exception as exc:  # noqa: BLE001 - a campaign must survive any trial failure
+        record = TrialRecord(
+            key=spec.key,
+            task=spec.task,
+            method=spec.method,
+            variant=spec.variant,
+            condition=spec.condition,
+            seed=spec.seed,
+            error=f"{type(exc).__name__}: {exc}\n{traceback.format_exc(limit=4)}",
+        )
+    return record.model_copy(update={"wall_time": time.perf_counter() - start})
