@@ -103,6 +103,9 @@ class AnalyzeRequest(StrictModel):
     history: list[Attempt]
     calibration: CameraCalibration
     max_step_mm: float
+    skills: dict[str, list[Axis]] = Field(
+        default_factory=dict, description="recovery skill -> the axes it controls (fit [y], align [y], insert [z])"
+    )
 
 
 class RelativeMotion(StrictModel):
