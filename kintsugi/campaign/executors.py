@@ -1,0 +1,183 @@
+"""Where trials run: a registry of executors, each yielding records as trials finish.
+
+- `process` (default): a spawn-started process pool. Spawn, not fork, because
+  workers render with EGL and a forked GL context is undefined behaviour. A worker
+  that dies (segfault, os._exit) breaks the pool; the trials it held are rerun one
+  per fresh single-worker pool, so the one that crashes again is recorded as a
+  failed trial and the innocent ones get their real result. The pool is then
+  recreated and the campaign goes on.
+- `inline`: same process, one after another; for debugging (a crash kills you).
+- `ray`: one ray task per trial, for users with a cluster.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+from collections import deque
+from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
+from concurrent.futures.process import BrokenProcessPool
+from typing import Callable, Iterable, Iterator, Protocol
+
+from kintsugi.campaign.bootstrap import bootstrap
+from kintsugi.errors import KintsugiError
+from kintsugi.registry import Registry
+from kintsugi.trial import TrialRecord, TrialSpec, run_trial
+
+
+class Executor(Protocol):
+    def run(self, specs: Iterable[TrialSpec]) -> Iterator[tuple[TrialSpec, TrialRecord]]:
+        """Run every spec; yield (spec, record) once per spec, in finishing order."""
+        ...
+
+
+ExecutorFactory = Callable[[int, list[str]], Executor]
+EXECUTORS: Registry[ExecutorFactory] = Registry("executor")
+
+
+def failed_record(spec: TrialSpec, error: str) -> TrialRecord:
+    """A failed trial that never produced its own record (crash, lost worker)."""
+    return TrialRecord(
+        key=spec.key, task=spec.task, method=spec.method, variant=spec.variant,
+        condition=spec.condition, seed=spec.seed, error=error,
+    )
+
+
+def run_in_worker(spec: TrialSpec, plugins: list[str]) -> TrialRecord:
+    """Worker entry point: make the task known in this process, then run the trial."""
+    try:
+        bootstrap(plugins, spec.task)
+    except KintsugiError as exc:
+        return failed_record(spec, f"KintsugiError: {exc}")
+    return run_trial(spec)
+
+
+_CRASH = (
+    "worker process crashed while running this trial (segfault, os._exit or out of memory{how}): {{exc}}. "
+    "Rerun this trial with the inline executor to see the crash."
+)
+CRASH_ONLY = _CRASH.format(how="; it was the only trial in its worker pool")
+CRASH_ALONE = _CRASH.format(how="; it crashed again when rerun alone")
+
+
+@EXECUTORS.register("inline", "run trials one by one in this process (debugging; a crash ends the campaign)")
+class InlineExecutor:
+    def __init__(self, workers: int, plugins: list[str]) -> None:
+        self.plugins = list(plugins)
+
+    def run(self, specs: Iterable[TrialSpec]) -> Iterator[tuple[TrialSpec, TrialRecord]]:
+        for spec in specs:
+            yield spec, run_in_worker(spec, self.plugins)
+
+
+@EXECUTORS.register("process", "spawn-started process pool on this machine (default)", tags=("default",))
+class ProcessExecutor:
+    def __init__(self, workers: int, plugins: list[str]) -> None:
+        if workers < 1:
+            raise KintsugiError(f"workers must be >= 1, got {workers}")
+        self.workers = workers
+        self.plugins = list(plugins)
+        self._ctx = multiprocessing.get_context("spawn")
+
+    def _pool(self, workers: int) -> ProcessPoolExecutor:
+        return ProcessPoolExecutor(max_workers=workers, mp_context=self._ctx)
+
+    def run(self, specs: Iterable[TrialSpec]) -> Iterator[tuple[TrialSpec, TrialRecord]]:
+        queue = deque(specs)
+        pool = self._pool(self.workers)
+        # Only `workers` trials are submitted at a time, so when the pool breaks we
+        # know exactly which trials were in it (queued ones were never started).
+        in_flight: dict[Future, TrialSpec] = {}
+        # Suspects of a crash, each alone in its own one-worker pool.
+        isolated: dict[Future, tuple[TrialSpec, ProcessPoolExecutor]] = {}
+        try:
+            while queue or in_flight or isolated:
+                while queue and len(in_flight) < self.workers:
+                    spec = queue.popleft()
+                    in_flight[pool.submit(run_in_worker, spec, self.plugins)] = spec
+                done, _ = wait([*in_flight, *isolated], return_when=FIRST_COMPLETED)
+                suspects: list[TrialSpec] = []
+                for fut in done:
+                    if fut in isolated:
+                        spec, solo = isolated.pop(fut)
+                        solo.shutdown(wait=False, cancel_futures=True)
+                        yield spec, self._outcome(fut, spec, CRASH_ALONE)
+                        continue
+                    spec = in_flight.pop(fut)
+                    if isinstance(fut.exception(), BrokenProcessPool):
+                        suspects.append(spec)
+                    else:
+                        yield spec, self._outcome(fut, spec, CRASH_ALONE)
+                if not suspects:
+                    continue
+                # The pool is broken: every trial still in it fails too. One suspect is
+                # the culprit; several are each rerun alone to find which one crashes.
+                suspects.extend(in_flight.values())
+                in_flight.clear()
+                pool.shutdown(wait=False, cancel_futures=True)
+                pool = self._pool(self.workers)
+                if len(suspects) == 1:
+                    yield suspects[0], failed_record(suspects[0], CRASH_ONLY.format(exc="BrokenProcessPool"))
+                    continue
+                for spec in suspects:
+                    solo = self._pool(1)
+                    isolated[solo.submit(run_in_worker, spec, self.plugins)] = (spec, solo)
+        finally:
+            pool.shutdown(wait=False, cancel_futures=True)
+            for _, solo in isolated.values():
+                solo.shutdown(wait=False, cancel_futures=True)
+
+    @staticmethod
+    def _outcome(fut: Future, spec: TrialSpec, crashed: str) -> TrialRecord:
+        exc = fut.exception()
+        if exc is None:
+            return fut.result()
+        if isinstance(exc, BrokenProcessPool):
+            return failed_record(spec, crashed.format(exc=str(exc).rstrip(".")))
+        # e.g. a record that could not be pickled back: still a recorded failure.
+        return failed_record(spec, f"{type(exc).__name__} in worker: {exc}")
+
+
+@EXECUTORS.register("ray", "one Ray task per trial (local or cluster; pip install 'kintsugi[ray]')")
+class RayExecutor:
+    def __init__(self, workers: int, plugins: list[str]) -> None:
+        try:
+            import ray
+        except ImportError:
+            raise KintsugiError(
+                "the ray executor needs Ray, which is not installed: pip install 'kintsugi[ray]' "
+                "(or use --executor process)"
+            ) from None
+        self.ray = ray
+        self.workers = workers
+        self.plugins = list(plugins)
+
+    def run(self, specs: Iterable[TrialSpec]) -> Iterator[tuple[TrialSpec, TrialRecord]]:
+        ray = self.ray
+        if not ray.is_initialized():
+            # Connects to RAY_ADDRESS when set (a cluster), else starts a local one.
+            ray.init(ignore_reinit_error=True, log_to_driver=False)
+        remote = ray.remote(max_retries=0)(run_in_worker)
+        queue = deque(specs)
+        # Keep a bounded number of tasks queued so an interrupt cancels little work.
+        window = max(self.workers, int(ray.available_resources().get("CPU", self.workers))) * 2
+        pending: dict = {}
+        try:
+            while queue or pending:
+                while queue and len(pending) < window:
+                    spec = queue.popleft()
+                    pending[remote.remote(spec, self.plugins)] = spec
+                ready, _ = ray.wait(list(pending), num_returns=1)
+                for ref in ready:
+                    spec = pending.pop(ref)
+                    try:
+                        yield spec, ray.get(ref)
+                    except Exception as exc:  # noqa: BLE001 - worker died or task failed outside run_trial
+                        yield spec, failed_record(spec, f"ray task failed ({type(exc).__name__}): {exc}")
+        finally:
+            for ref in pending:
+                ray.cancel(ref, force=True)
+
+
+def make_executor(name: str, workers: int, plugins: list[str]) -> Executor:
+    """Build an executor by registry name (unknown names list the known ones)."""
+    return EXECUTORS.get(name).factory(workers, plugins)

@@ -1,0 +1,97 @@
+"""Run a campaign: expand, skip what results.jsonl already holds, run the rest, append as they finish.
+
+Resume is by trial key: kill the process at any moment and rerun the same
+command; every trial whose line reached the disk is skipped, every other one runs.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from rich.console import Console
+from rich.progress import (
+    BarColumn,
+    MofNCompleteColumn,
+    Progress,
+    TextColumn,
+    TimeElapsedColumn,
+    TimeRemainingColumn,
+)
+
+from kintsugi.campaign.bootstrap import bootstrap
+from kintsugi.campaign.executors import failed_record, make_executor
+from kintsugi.campaign.plan import CampaignConfig, expand
+from kintsugi.campaign.store import ResultStore
+from kintsugi.trial import TrialRecord, TrialSpec
+
+
+def _progress(console: Console, enabled: bool) -> Progress:
+    return Progress(
+        TextColumn("[bold]{task.description}"),
+        BarColumn(),
+        MofNCompleteColumn(),
+        TextColumn("[green]{task.fields[ok]} ok[/] [red]{task.fields[err]} errors[/]"),
+        TimeElapsedColumn(),
+        TextColumn("ETA"),
+        TimeRemainingColumn(),
+        console=console,
+        disable=not enabled,
+    )
+
+
+def run_campaign(
+    cfg: CampaignConfig,
+    out_dir: str | Path,
+    workers: int = 2,
+    executor: str = "process",
+    progress: bool = True,
+    console: Console | None = None,
+) -> list[TrialRecord]:
+    """Run (or resume) a campaign into `out_dir`; return the records of all its trials, in config order.
+
+    Raises KintsugiError before running anything if the task is unknown, a plugin
+    fails to import, the executor is unknown/unavailable, or `out_dir` holds a
+    campaign with a different config.
+    """
+    out = Path(out_dir)
+    bootstrap(cfg.plugins, cfg.task)  # fail fast here rather than once per trial in workers
+    runner = make_executor(executor, workers, cfg.plugins)
+    store = ResultStore(out)
+    store.ensure_manifest(cfg)
+    specs = expand(cfg, video_dir=out / "videos")
+    if any(s.video for s in specs):
+        (out / "videos").mkdir(parents=True, exist_ok=True)
+
+    wanted = {s.key for s in specs}
+    records = {r.key: r for r in store.read() if r.key in wanted}
+    todo = [s for s in specs if s.key not in records]
+
+    console = console or Console(stderr=True)
+    ok = sum(r.success for r in records.values())
+    err = sum(r.error is not None for r in records.values())
+    if progress and records:
+        console.print(f"resuming {out}: {len(records)} of {len(specs)} trials already recorded")
+
+    with store.appender() as appender, _progress(console, progress) as bar:
+        task_id = bar.add_task(cfg.task, total=len(specs), completed=len(records), ok=ok, err=err)
+        for spec, record in runner.run(todo) if todo else ():
+            record = _checked(spec, record)
+            appender.append(record)
+            records[record.key] = record
+            ok += record.success
+            err += record.error is not None
+            bar.update(task_id, advance=1, ok=ok, err=err)
+    return [records[s.key] for s in specs if s.key in records]
+
+
+def _checked(spec: TrialSpec, record: TrialRecord) -> TrialRecord:
+    """A record must carry its trial's identity, or resume would rerun that trial forever."""
+    ident = ("key", "task", "method", "variant", "condition", "seed")
+    wrong = [f for f in ident if getattr(record, f) != (spec.key if f == "key" else getattr(spec, f))]
+    if not wrong:
+        return record
+    return failed_record(
+        spec,
+        f"task {spec.task!r} returned a record whose {', '.join(wrong)} do not match the trial "
+        f"(got key {record.key!r}); its run() must copy them from the TrialSpec",
+    )

@@ -1,0 +1,64 @@
+"""A tiny fake task for campaign tests: a seeded coin instead of physics.
+
+Imported as a plugin (`plugins=["tests.fake_tasks"]`) so spawned workers register it too.
+
+Variants:
+- "fair" / "biased": success with p = 0.5 / 0.8, drawn from default_rng(seed).
+- "raises": every trial with an even seed raises inside run().
+- "crashes": the trial with seed 1 kills its worker with os._exit(1) (only in a
+  child process; in the main process it raises instead, so a test never kills pytest).
+Methods: "baseline" has no recovery; "recover" reports extra executions and transitions.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+
+import numpy as np
+
+from kintsugi.tasks import TASKS
+from kintsugi.trial import TrialRecord, TrialSpec
+
+P_SUCCESS = {"fair": 0.5, "biased": 0.8, "raises": 0.5, "crashes": 0.5}
+SKILLS = ("fit", "align", "insert")
+
+
+class FakeCoinTask:
+    def run(self, spec: TrialSpec) -> TrialRecord:
+        rng = np.random.default_rng(spec.seed)
+        if spec.variant == "raises" and spec.seed % 2 == 0:
+            raise RuntimeError(f"fake failure on seed {spec.seed}")
+        if spec.variant == "crashes" and spec.seed == 1:
+            if multiprocessing.parent_process() is not None:
+                os._exit(1)
+            raise RuntimeError("would crash the worker (refusing to kill the main process)")
+        p = P_SUCCESS[spec.variant] + (0.1 if spec.condition == "easy" else 0.0)
+        success = bool(rng.random() < p)
+        extra: dict[str, int] = {}
+        transitions: list[tuple[str, str]] = []
+        if spec.method == "recover":
+            extra = {s: int(rng.integers(0, 3)) for s in SKILLS}
+            for s in SKILLS:
+                for _ in range(extra[s]):
+                    transitions.append((s, SKILLS[int(rng.integers(0, 3))]))
+            success = success or bool(rng.random() < 0.5)
+        calls = len(transitions) * 2
+        return TrialRecord(
+            key=spec.key, task=spec.task, method=spec.method, variant=spec.variant,
+            condition=spec.condition, seed=spec.seed,
+            params={"p": p},
+            success=success,
+            framework_success=success if spec.seed % 5 else not success,
+            extra_executions=extra,
+            transitions=transitions,
+            sim_time=float(rng.uniform(1, 5)),
+            physics_steps=int(rng.integers(100, 1000)),
+            reasoning_calls=calls,
+            reasoning_latency_s=0.01 * calls,
+        )
+
+
+@TASKS.register("fake-coin", "seeded coin flips for campaign tests", tags=("test",))
+def make_fake_coin() -> FakeCoinTask:
+    return FakeCoinTask()
