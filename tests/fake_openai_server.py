@@ -1,0 +1,181 @@
+"""A local HTTP server speaking the OpenAI chat-completions protocol, with scripted replies.
+
+Tests push `Script`s (JSON content, tool calls, HTTP errors, hangs) and then read
+`server.requests` to see exactly what the client sent. No test ever needs a real
+endpoint. Use it as a context manager or through the `fake_openai` fixture.
+"""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+import uuid
+from collections import deque
+from dataclasses import dataclass, field
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
+from typing import Any, Iterator
+
+import pytest
+
+
+@dataclass
+class Script:
+    """One scripted response. Build with the helper functions below."""
+
+    kind: str  # "content" | "tool_calls" | "error" | "hang"
+    content: str | None = None
+    tool_calls: list[tuple[str, str]] = field(default_factory=list)
+    status: int = 200
+    retry_after_s: float | None = None
+    hang_s: float = 0.0
+    usage: tuple[int, int] = (100, 20)
+
+
+def content(reply: Any, usage: tuple[int, int] = (100, 20)) -> Script:
+    """Assistant text; dicts/lists are JSON-encoded, strings sent verbatim (so malformed JSON works)."""
+    text = reply if isinstance(reply, str) else json.dumps(reply)
+    return Script("content", content=text, usage=usage)
+
+
+def tool_calls(*calls: tuple[str, Any], usage: tuple[int, int] = (100, 20)) -> Script:
+    """Assistant tool calls (name, arguments); dict arguments are JSON-encoded, strings verbatim."""
+    encoded = [(name, args if isinstance(args, str) else json.dumps(args)) for name, args in calls]
+    return Script("tool_calls", tool_calls=encoded, usage=usage)
+
+
+def http_error(status: int, retry_after_s: float | None = 0.01) -> Script:
+    """An HTTP error; a small retry-after keeps the SDK's backoff short in tests."""
+    return Script("error", status=status, retry_after_s=retry_after_s)
+
+
+def hang(seconds: float) -> Script:
+    """Accept the request and send nothing for `seconds` (longer than the client timeout)."""
+    return Script("hang", hang_s=seconds)
+
+
+class FakeOpenAIServer:
+    """Threaded stdlib HTTP server on 127.0.0.1 with a random free port."""
+
+    def __init__(self) -> None:
+        self.scripts: deque[Script] = deque()
+        self.requests: list[dict[str, Any]] = []
+        self.headers: list[dict[str, str]] = []
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._httpd = ThreadingHTTPServer(("127.0.0.1", 0), self._handler_class())
+        self._httpd.daemon_threads = True
+        self._thread = threading.Thread(target=self._httpd.serve_forever, kwargs={"poll_interval": 0.02}, daemon=True)
+
+    @property
+    def base_url(self) -> str:
+        host, port = self._httpd.server_address[:2]
+        return f"http://{host}:{port}/v1"
+
+    def push(self, *scripts: Script) -> None:
+        with self._lock:
+            self.scripts.extend(scripts)
+
+    def start(self) -> "FakeOpenAIServer":
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        self._stop.set()  # releases hanging handlers
+        self._httpd.shutdown()
+        self._httpd.server_close()
+
+    def __enter__(self) -> "FakeOpenAIServer":
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
+
+    def _next(self, body: dict[str, Any], headers: dict[str, str]) -> Script | None:
+        with self._lock:
+            self.requests.append(body)
+            self.headers.append(headers)
+            return self.scripts.popleft() if self.scripts else None
+
+    def _handler_class(self) -> type[BaseHTTPRequestHandler]:
+        server = self
+
+        class Handler(BaseHTTPRequestHandler):
+            protocol_version = "HTTP/1.1"
+
+            def log_message(self, *args: Any) -> None:  # keep test output clean
+                pass
+
+            def _send(self, status: int, payload: dict[str, Any], extra: dict[str, str] | None = None) -> None:
+                data = json.dumps(payload).encode()
+                try:
+                    self.send_response(status)
+                    self.send_header("Content-Type", "application/json")
+                    self.send_header("Content-Length", str(len(data)))
+                    for k, v in (extra or {}).items():
+                        self.send_header(k, v)
+                    self.end_headers()
+                    self.wfile.write(data)
+                except (BrokenPipeError, ConnectionResetError):
+                    pass  # the client gave up (timeout); nothing to do
+
+            def do_POST(self) -> None:  # noqa: N802 - stdlib name
+                length = int(self.headers.get("Content-Length", 0))
+                raw = self.rfile.read(length)
+                if self.path.rstrip("/") != "/v1/chat/completions":
+                    self._send(404, {"error": {"message": f"no route {self.path}", "type": "not_found"}})
+                    return
+                try:
+                    body = json.loads(raw)
+                except json.JSONDecodeError:
+                    self._send(400, {"error": {"message": "body is not JSON", "type": "invalid_request_error"}})
+                    return
+                script = server._next(body, {k.lower(): v for k, v in self.headers.items()})
+                if script is None:
+                    # fail loudly and tell the SDK not to retry, so a missing script is obvious
+                    self._send(500, {"error": {"message": "fake server: no scripted reply left", "type": "test"}},
+                               {"x-should-retry": "false"})
+                    return
+                if script.kind == "hang":
+                    server._stop.wait(script.hang_s)
+                    self.close_connection = True
+                    return
+                if script.kind == "error":
+                    extra = {}
+                    if script.retry_after_s is not None:
+                        extra["retry-after-ms"] = str(int(script.retry_after_s * 1000) or 1)
+                        extra["retry-after"] = str(script.retry_after_s)
+                    self._send(script.status, {"error": {"message": f"scripted HTTP {script.status}",
+                                                         "type": "server_error", "code": None}}, extra)
+                    return
+                self._send(200, _completion(body, script))
+
+        return Handler
+
+
+def _completion(body: dict[str, Any], script: Script) -> dict[str, Any]:
+    message: dict[str, Any] = {"role": "assistant", "content": script.content, "refusal": None}
+    finish = "stop"
+    if script.kind == "tool_calls":
+        message["content"] = None
+        message["tool_calls"] = [
+            {"id": f"call_{uuid.uuid4().hex[:12]}", "type": "function", "function": {"name": n, "arguments": a}}
+            for n, a in script.tool_calls
+        ]
+        finish = "tool_calls"
+    prompt, completion = script.usage
+    return {
+        "id": f"chatcmpl-{uuid.uuid4().hex}",
+        "object": "chat.completion",
+        "created": int(time.time()),
+        "model": body.get("model", "fake"),
+        "choices": [{"index": 0, "message": message, "finish_reason": finish, "logprobs": None}],
+        "usage": {"prompt_tokens": prompt, "completion_tokens": completion, "total_tokens": prompt + completion},
+    }
+
+
+@pytest.fixture
+def fake_openai() -> Iterator[FakeOpenAIServer]:
+    """A running fake server, stopped after the test."""
+    with FakeOpenAIServer() as server:
+        yield server
