@@ -1,0 +1,204 @@
+"""Peg and hole segmentation by HSV thresholds, and their measurements in pixels and mm.
+
+Pixel convention: integer coordinates are pixel centres, so a pixel covers
+[i - 0.5, i + 0.5]. A bounding box (x, y, w, h) therefore spans
+[x - 0.5, x + w - 0.5] horizontally, and its centre is x + (w - 1) / 2.
+Millimetres come from ``CameraCalibration.to_plane``: y grows to the right
+(u), z grows upward (against v).
+"""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+import cv2
+import numpy as np
+from pydantic import Field
+
+from kintsugi.config import StrictModel
+from kintsugi.perception.tilt import TiltMethod, estimate_tilt
+from kintsugi.reasoning.types import CameraCalibration
+
+HSV = tuple[int, int, int]
+KernelPx = Annotated[int, Field(ge=1, le=31)]
+
+
+class HsvRange(StrictModel):
+    """Inclusive OpenCV HSV bounds (H in 0..180, S and V in 0..255)."""
+
+    lower: HSV
+    upper: HSV
+
+
+class PerceptionConfig(StrictModel):
+    """Colour thresholds, mask clean-up and the tolerances the checks use."""
+
+    peg_hsv: list[HsvRange] = Field(
+        default_factory=lambda: [HsvRange(lower=(78, 90, 40), upper=(102, 255, 255))],
+        description="cyan peg; hue 90 is pure cyan",
+    )
+    hole_hsv: list[HsvRange] = Field(
+        default_factory=lambda: [
+            HsvRange(lower=(0, 110, 40), upper=(10, 255, 255)),
+            HsvRange(lower=(170, 110, 40), upper=(180, 255, 255)),
+        ],
+        description="red wraps around hue 0/180, hence two ranges",
+    )
+    open_kernel_px: KernelPx = 3
+    close_kernel_px: KernelPx = 5
+    min_area_px: float = Field(default=40.0, ge=0)
+    align_tol_mm: float = Field(default=3.0, ge=0, description="|P_center - H_center| counted as 'on the hole'")
+    tilt_tol_deg: float = Field(default=5.0, ge=0, description="tilt within ±this is 'vertical'")
+    insert_top_tol_mm: float = Field(default=3.0, ge=0, description="peg-top height match vs the goal image")
+    insert_min_iou: float = Field(default=0.5, ge=0, le=1, description="peg masks must overlap at least this")
+    board_surface_z_mm: float = Field(default=0.0, description="used when the board line is not found in the image")
+
+
+class Blob(StrictModel):
+    """One segmented region. Pixel boxes are (x, y, w, h); *_mm edges are y (left/right) or z (top/bottom)."""
+
+    bbox_px: tuple[int, int, int, int]
+    area_px: float
+    center_px: tuple[float, float]
+    center_mm: tuple[float, float] = Field(description="(y, z) of the bounding-box centre")
+    left_mm: float
+    right_mm: float
+    top_mm: float
+    bottom_mm: float
+
+
+class PegBlob(Blob):
+    """The peg's visible part: P_center is ``center_mm``, P_edge is ``edge_mm`` (bottom-right)."""
+
+    edge_px: tuple[float, float]
+    edge_mm: tuple[float, float]
+    tilt_deg: float = Field(description="peg axis from vertical, + when the top leans left, in (-90, 90]")
+    tilt_method: TiltMethod
+
+
+class SceneMeasurement(StrictModel):
+    """What the camera shows; ``peg`` or ``hole`` is None when not found (never an exception)."""
+
+    image_size: tuple[int, int]
+    peg: PegBlob | None
+    hole: Blob | None
+
+
+def _mask(hsv: np.ndarray, ranges: list[HsvRange], cfg: PerceptionConfig) -> np.ndarray:
+    mask = np.zeros(hsv.shape[:2], np.uint8)
+    for r in ranges:
+        mask |= cv2.inRange(hsv, np.array(r.lower, np.uint8), np.array(r.upper, np.uint8))
+    if cfg.open_kernel_px > 1:
+        k = cv2.getStructuringElement(cv2.MORPH_RECT, (cfg.open_kernel_px, cfg.open_kernel_px))
+        mask = cv2.morphologyEx(mask, cv2.MORPH_OPEN, k)
+    if cfg.close_kernel_px > 1:  # fills specular highlights inside the peg
+        k = cv2.getStructuringElement(cv2.MORPH_RECT, (cfg.close_kernel_px, cfg.close_kernel_px))
+        mask = cv2.morphologyEx(mask, cv2.MORPH_CLOSE, k)
+    return mask
+
+
+def _to_hsv(image_rgb: np.ndarray) -> np.ndarray:
+    img = np.asarray(image_rgb)
+    if img.ndim != 3 or img.shape[2] < 3:
+        raise ValueError(f"expected an RGB image of shape (H, W, 3), got {img.shape}")
+    return cv2.cvtColor(np.ascontiguousarray(img[:, :, :3], dtype=np.uint8), cv2.COLOR_RGB2HSV)
+
+
+def _largest(mask: np.ndarray, min_area: float) -> np.ndarray | None:
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    best = max(contours, key=cv2.contourArea, default=None)
+    if best is None or cv2.contourArea(best) < min_area or len(best) < 3:
+        return None
+    return best
+
+
+def peg_mask(image_rgb: np.ndarray, cfg: PerceptionConfig) -> np.ndarray:
+    """Binary mask (0/255) of the largest peg-coloured region; all zero if none."""
+    mask = _mask(_to_hsv(image_rgb), cfg.peg_hsv, cfg)
+    out = np.zeros_like(mask)
+    contour = _largest(mask, cfg.min_area_px)
+    if contour is not None:
+        cv2.drawContours(out, [contour], -1, 255, thickness=cv2.FILLED)
+        out &= mask
+    return out
+
+
+def _blob_fields(contour: np.ndarray, calib: CameraCalibration, area: float | None = None) -> dict:
+    x, y, w, h = cv2.boundingRect(contour)
+    cu, cv_ = x + (w - 1) / 2.0, y + (h - 1) / 2.0
+    left, top = calib.to_plane(x - 0.5, y - 0.5)
+    right, bottom = calib.to_plane(x + w - 0.5, y + h - 0.5)
+    return dict(
+        bbox_px=(x, y, w, h),
+        area_px=float(cv2.contourArea(contour)) if area is None else area,
+        center_px=(cu, cv_),
+        center_mm=calib.to_plane(cu, cv_),
+        left_mm=left,
+        right_mm=right,
+        top_mm=top,
+        bottom_mm=bottom,
+    )
+
+
+def _peg(contour: np.ndarray, calib: CameraCalibration, size: tuple[int, int]) -> PegBlob:
+    fields = _blob_fields(contour, calib)
+    x, y, w, h = fields["bbox_px"]
+    edge_px = (x + w - 0.5, y + h - 0.5)
+    tilt, method = estimate_tilt(contour, size)
+    return PegBlob(**fields, edge_px=edge_px, edge_mm=calib.to_plane(*edge_px), tilt_deg=tilt, tilt_method=method)
+
+
+def measure(image_rgb: np.ndarray, calib: CameraCalibration, cfg: PerceptionConfig | None = None) -> SceneMeasurement:
+    """Segment peg (largest cyan contour) and hole (largest red contour) and measure them.
+
+    The hole is the largest red contour, as in the paper; if the peg hides
+    part of the red face and splits it, the other red pieces that touch the
+    largest one's column span are merged so H_center stays the face's centre.
+    """
+    cfg = cfg or PerceptionConfig()
+    hsv = _to_hsv(image_rgb)
+    size = (hsv.shape[1], hsv.shape[0])
+    peg_c = _largest(_mask(hsv, cfg.peg_hsv, cfg), cfg.min_area_px)
+    hole = _hole_contour(_mask(hsv, cfg.hole_hsv, cfg), cfg.min_area_px)
+    return SceneMeasurement(
+        image_size=size,
+        peg=None if peg_c is None else _peg(peg_c, calib, size),
+        hole=None if hole is None else Blob(**_blob_fields(hole[0], calib, hole[1])),
+    )
+
+
+def _hole_contour(mask: np.ndarray, min_area: float) -> tuple[np.ndarray, float] | None:
+    """(points of the hole's face, its area in px), or None."""
+    contours, _ = cv2.findContours(mask, cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_NONE)
+    areas = [cv2.contourArea(c) for c in contours]
+    if not contours or max(areas) < min_area:
+        return None
+    i_best = int(np.argmax(areas))
+    bx, by, bw, bh = cv2.boundingRect(contours[i_best])
+    parts = [i_best]
+    for i, c in enumerate(contours):
+        if i == i_best or areas[i] < 4:
+            continue
+        x, y, w, h = cv2.boundingRect(c)
+        overlaps_rows = y <= by + bh and by <= y + h
+        near_cols = x <= bx + bw + 2 and bx <= x + w + 2
+        if overlaps_rows and near_cols:
+            parts.append(i)
+    points = np.concatenate([contours[i] for i in parts])
+    return points, float(sum(areas[i] for i in parts))
+
+
+def board_surface_v(image_rgb: np.ndarray, min_fraction: float = 0.5) -> float | None:
+    """Image row of the board's top surface: first row (from the top) that is mostly grey.
+
+    Grey = low saturation and mid brightness; returns None when no such row exists.
+    """
+    hsv = _to_hsv(image_rgb)
+    grey = (hsv[:, :, 1] < 40) & (hsv[:, :, 2] > 60) & (hsv[:, :, 2] < 235)
+    frac = grey.mean(axis=1)
+    rows = np.flatnonzero(frac >= min_fraction)
+    # Require the row below to be grey too, so a stray grey line does not count.
+    for r in rows:
+        if r + 1 < len(frac) and frac[r + 1] >= min_fraction:
+            return float(r) - 0.5
+    return None
