@@ -110,3 +110,20 @@ def draw_scene(
     if noise > 0:
         img = np.clip(img.astype(np.float32) + rng.normal(0, noise, img.shape), 0, 255).astype(np.uint8)
     return img
+
+
+def visible_box_mm(peg: PegPose, surface_z: float = 0.0) -> tuple[float, float, float, float] | None:
+    """(left y, right y, bottom z, top z) of the peg's part above the surface, or None if hidden."""
+    poly = peg.visible_polygon(surface_z)
+    if len(poly) < 3:
+        return None
+    return float(poly[:, 0].min()), float(poly[:, 0].max()), float(poly[:, 1].min()), float(poly[:, 1].max())
+
+
+def peg_centred_at(center_y: float, z: float, tilt_deg: float = 0.0, **kw: float) -> PegPose:
+    """A peg whose visible bounding-box centre is at y = center_y (bottom at height z)."""
+    probe = PegPose(y=0.0, z=z, tilt_deg=tilt_deg, **kw)
+    box = visible_box_mm(probe)
+    if box is None:
+        raise ValueError(f"a peg with its bottom at z={z} mm is entirely hidden by the board")
+    return probe.model_copy(update={"y": center_y - (box[0] + box[1]) / 2.0})
