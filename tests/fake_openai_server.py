@@ -30,6 +30,7 @@ class Script:
     retry_after_s: float | None = None
     hang_s: float = 0.0
     usage: tuple[int, int] = (100, 20)
+    refusal: str | None = None
 
 
 def content(reply: Any, usage: tuple[int, int] = (100, 20)) -> Script:
@@ -42,6 +43,11 @@ def tool_calls(*calls: tuple[str, Any], usage: tuple[int, int] = (100, 20)) -> S
     """Assistant tool calls (name, arguments); dict arguments are JSON-encoded, strings verbatim."""
     encoded = [(name, args if isinstance(args, str) else json.dumps(args)) for name, args in calls]
     return Script("tool_calls", tool_calls=encoded, usage=usage)
+
+
+def refusal(text: str) -> Script:
+    """A refusal: no content, the reason in `message.refusal` (as OpenAI sends it)."""
+    return Script("content", content=None, refusal=text)
 
 
 def http_error(status: int, retry_after_s: float | None = 0.01) -> Script:
@@ -154,7 +160,7 @@ class FakeOpenAIServer:
 
 
 def _completion(body: dict[str, Any], script: Script) -> dict[str, Any]:
-    message: dict[str, Any] = {"role": "assistant", "content": script.content, "refusal": None}
+    message: dict[str, Any] = {"role": "assistant", "content": script.content, "refusal": script.refusal}
     finish = "stop"
     if script.kind == "tool_calls":
         message["content"] = None

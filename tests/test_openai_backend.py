@@ -9,7 +9,7 @@ import zlib
 
 import pytest
 
-from tests.fake_openai_server import FakeOpenAIServer, content, fake_openai, hang, http_error, tool_calls  # noqa: F401
+from tests.fake_openai_server import FakeOpenAIServer, content, fake_openai, hang, http_error, refusal, tool_calls  # noqa: F401
 from kintsugi.errors import ConfigError, KintsugiError, ReasoningError, UnknownNameError
 from kintsugi.reasoning import REASONERS, make_reasoner
 from kintsugi.reasoning.base import Reasoner, RecordingReasoner
@@ -188,6 +188,12 @@ def test_malformed_twice_raises(fake_openai: FakeOpenAIServer) -> None:
     with pytest.raises(ReasoningError, match="no usable reply in 2 attempts"):
         reasoner(fake_openai).judge(judge_request())
     assert len(fake_openai.requests) == 2
+
+
+def test_refusal_is_reported_and_repaired(fake_openai: FakeOpenAIServer) -> None:
+    fake_openai.push(refusal("I cannot help with that"), content({"success": True, "explanation": "ok"}))
+    assert reasoner(fake_openai).judge(judge_request()).success
+    assert "refused (I cannot help with that)" in fake_openai.requests[1]["messages"][-1]["content"]
 
 
 def test_wrong_types_are_quoted_back(fake_openai: FakeOpenAIServer) -> None:

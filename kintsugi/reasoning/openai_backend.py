@@ -142,6 +142,14 @@ def _plan_tools(request: PlanRequest) -> list[dict[str, Any]]:
     return tools
 
 
+def _content_json(message: Any) -> Any:
+    """JSON object from an assistant message's text (refusals are reported as such)."""
+    refusal = getattr(message, "refusal", None)
+    if refusal and not message.content:
+        raise BadReply(f"the model refused ({refusal}); this is a robot-control task, answer in the requested format")
+    return _decode_json(message.content)
+
+
 def _decode_json(text: str | None) -> Any:
     """JSON from a reply, tolerating code fences and prose around one object."""
     if text is None or not text.strip():
@@ -193,13 +201,13 @@ class OpenAIReasoner:
     def judge(self, request: JudgeRequest) -> JudgeReply:
         return self._run(
             "judge", request, {"response_format": _response_format(JudgeReply)},
-            lambda msg: _validate(JudgeReply, _decode_json(msg.content)),
+            lambda msg: _validate(JudgeReply, _content_json(msg)),
         )
 
     def analyze(self, request: AnalyzeRequest) -> AnalyzeReply:
         return self._run(
             "analyze", request, {"response_format": _response_format(AnalyzeReply)},
-            lambda msg: validate_analysis(_validate(AnalyzeReply, _decode_json(msg.content)), request),
+            lambda msg: validate_analysis(_validate(AnalyzeReply, _content_json(msg)), request),
         )
 
     def plan(self, request: PlanRequest) -> PlanReply:
@@ -209,7 +217,7 @@ class OpenAIReasoner:
             if msg.tool_calls:
                 reply = self._plan_from_tool_calls(msg.tool_calls, request)
             else:
-                reply = _validate(PlanReply, _decode_json(msg.content))
+                reply = _validate(PlanReply, _content_json(msg))
             validate_plan(reply, request)  # structural errors go back to the model; clamping is the caller's
             return reply
 
