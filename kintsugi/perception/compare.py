@@ -6,6 +6,10 @@ module turns that comparison into numbers (peg-top height above the board in
 both images, peg-mask overlap, horizontal offset) for the reasoner to fuse
 with the pose and compression checks. Its ``passed`` is a measurement-level
 opinion, not the verdict.
+
+"Peg top" is the top of the peg's *visible* cyan region: the gripper's
+fingers or the frame edge may hide the real top, but they do so the same way
+in the goal image, so the difference is still how much deeper the peg must go.
 """
 
 from __future__ import annotations
@@ -63,7 +67,7 @@ def compare_to_goal(
     if term.peg is None:
         parts.append("peg not visible (hidden below the board surface or out of view)")
     else:
-        parts.append(f"peg top {h_term:.1f} mm above the board surface")
+        parts.append(f"visible peg top {h_term:.1f} mm above the board surface")
     parts.append("goal image: peg not visible" if goal.peg is None else f"goal image: {h_goal:.1f} mm")
     parts.append(f"difference {diff:+.1f} mm (tolerance {cfg.insert_top_tol_mm:g} mm)")
     parts.append(f"peg-mask IoU with goal {iou:.2f}")

@@ -1,8 +1,9 @@
 """Peg and hole segmentation by HSV thresholds, and their measurements in pixels and mm.
 
-Pixel convention: integer coordinates are pixel centres, so a pixel covers
-[i - 0.5, i + 0.5]. A bounding box (x, y, w, h) therefore spans
-[x - 0.5, x + w - 0.5] horizontally, and its centre is x + (w - 1) / 2.
+Pixel convention: pixel (i, j) covers [i, i + 1) x [j, j + 1), so a bounding
+box (x, y, w, h) spans [x, x + w] horizontally and its centre is x + w / 2.
+This matches MuJoCo's renderer with ``cu = width / 2`` (the optical axis
+falls on the boundary between the two middle columns).
 Millimetres come from ``CameraCalibration.to_plane``: y grows to the right
 (u), z grows upward (against v).
 """
@@ -125,9 +126,9 @@ def peg_mask(image_rgb: np.ndarray, cfg: PerceptionConfig) -> np.ndarray:
 
 def _blob_fields(contour: np.ndarray, calib: CameraCalibration, area: float | None = None) -> dict:
     x, y, w, h = cv2.boundingRect(contour)
-    cu, cv_ = x + (w - 1) / 2.0, y + (h - 1) / 2.0
-    left, top = calib.to_plane(x - 0.5, y - 0.5)
-    right, bottom = calib.to_plane(x + w - 0.5, y + h - 0.5)
+    cu, cv_ = x + w / 2.0, y + h / 2.0
+    left, top = calib.to_plane(x, y)
+    right, bottom = calib.to_plane(x + w, y + h)
     return dict(
         bbox_px=(x, y, w, h),
         area_px=float(cv2.contourArea(contour)) if area is None else area,
@@ -143,7 +144,7 @@ def _blob_fields(contour: np.ndarray, calib: CameraCalibration, area: float | No
 def _peg(contour: np.ndarray, calib: CameraCalibration, size: tuple[int, int]) -> PegBlob:
     fields = _blob_fields(contour, calib)
     x, y, w, h = fields["bbox_px"]
-    edge_px = (x + w - 0.5, y + h - 0.5)
+    edge_px = (float(x + w), float(y + h))
     tilt, method = estimate_tilt(contour, size)
     return PegBlob(**fields, edge_px=edge_px, edge_mm=calib.to_plane(*edge_px), tilt_deg=tilt, tilt_method=method)
 
@@ -189,7 +190,7 @@ def _hole_contour(mask: np.ndarray, min_area: float) -> tuple[np.ndarray, float]
 
 
 def board_surface_v(image_rgb: np.ndarray, min_fraction: float = 0.5) -> float | None:
-    """Image row of the board's top surface: first row (from the top) that is mostly grey.
+    """Image v of the board's top surface (the top boundary of the first mostly-grey row).
 
     Grey = low saturation and mid brightness; returns None when no such row exists.
     """
@@ -200,5 +201,5 @@ def board_surface_v(image_rgb: np.ndarray, min_fraction: float = 0.5) -> float |
     # Require the row below to be grey too, so a stray grey line does not count.
     for r in rows:
         if r + 1 < len(frac) and frac[r + 1] >= min_fraction:
-            return float(r) - 0.5
+            return float(r)
     return None

@@ -19,9 +19,9 @@ SS = 4  # supersampling factor of the rasteriser
 
 
 def default_calibration(width: int = 320, height: int = 240, px_per_mm: float = 2.0) -> CameraCalibration:
-    """Board surface (z = 0) two thirds down the image, y = 0 at the centre column."""
+    """Board surface (z = 0) two thirds down the image, y = 0 at the image centre (cu = width / 2)."""
     return CameraCalibration(
-        width=width, height=height, px_per_mm=px_per_mm, cu=(width - 1) / 2.0, cv=round(height * 2 / 3) - 0.5,
+        width=width, height=height, px_per_mm=px_per_mm, cu=width / 2.0, cv=float(round(height * 2 / 3)),
         y0_mm=0.0, z0_mm=0.0,
     )
 
@@ -74,7 +74,7 @@ def _raster(calib: CameraCalibration, pts_mm: np.ndarray) -> np.ndarray:
     pixel; supersampling then area-averaging makes the drawing unbiased.
     """
     px = np.array([calib.to_pixel(float(y), float(z)) for y, z in pts_mm])
-    sub = np.round((px + 0.5) * SS - 0.5).astype(np.int32)
+    sub = np.round(px * SS - 0.5).astype(np.int32)  # pixel i covers [i, i + 1)
     canvas = np.zeros((calib.height * SS, calib.width * SS), np.uint8)
     cv2.fillPoly(canvas, [sub], 255, lineType=cv2.LINE_8)
     cover = cv2.resize(canvas, (calib.width, calib.height), interpolation=cv2.INTER_AREA)
@@ -101,7 +101,7 @@ def draw_scene(
         colour = np.clip(np.array(peg_rgb)[None, None, :] * shade[:, :, None], 0, 255).astype(np.uint8)
         img[layer] = colour[layer]
     surface_v = calib.to_pixel(0.0, 0.0)[1]
-    top_row = int(math.ceil(surface_v))  # first pixel row whose centre is below the surface
+    top_row = int(math.ceil(surface_v - 0.5))  # first pixel row whose centre (j + 0.5) is below the surface
     img[top_row:] = (128, 128, 128)
     if hole is not None:
         rect = np.array([[hole.y - hole.width_mm / 2, 0.0], [hole.y + hole.width_mm / 2, 0.0],
