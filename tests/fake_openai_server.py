@@ -108,6 +108,7 @@ class FakeOpenAIServer:
 
         class Handler(BaseHTTPRequestHandler):
             protocol_version = "HTTP/1.1"
+            disable_nagle_algorithm = True  # no 40 ms delayed-ACK stalls per reply
 
             def log_message(self, *args: Any) -> None:  # keep test output clean
                 pass

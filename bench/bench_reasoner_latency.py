@@ -1,0 +1,118 @@
+"""Latency of the openai reasoner per role: client overhead (fake local server) or a real endpoint.
+
+    .venv/bin/python bench/bench_reasoner_latency.py               # fake server, client-side cost only
+    .venv/bin/python bench/bench_reasoner_latency.py --base-url http://localhost:8000/v1 --model Qwen2.5-VL-7B
+
+Images are 640x480 PNGs like the task camera's, so the numbers include PNG
+base64 encoding and request size; with a real endpoint they include the model.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+import cv2
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from kintsugi.reasoning.base import RecordingReasoner  # noqa: E402
+from kintsugi.reasoning.openai_backend import OpenAIReasoner  # noqa: E402
+from kintsugi.reasoning.types import (  # noqa: E402
+    AnalyzeReply,
+    AnalyzeRequest,
+    CameraCalibration,
+    CheckResult,
+    JudgeReply,
+    JudgeRequest,
+    PlanRequest,
+    Pose,
+    SkillOutcome,
+)
+from tests.fake_openai_server import FakeOpenAIServer, content, tool_calls  # noqa: E402
+
+SKILLS = {"fit": ["y"], "align": ["y"], "insert": ["z"]}
+GOALS = {"fit": Pose(y=10, z=5), "align": Pose(y=12, z=5), "insert": Pose(y=12, z=-20)}
+
+
+def camera_png(seed: int) -> bytes:
+    """A 640x480 scene-like image: grey background, red rim, green tilted peg, sensor noise."""
+    rng = np.random.default_rng(seed)
+    img = np.full((480, 640, 3), 200, np.uint8)
+    cv2.rectangle(img, (220, 300), (300, 320), (0, 0, 220), -1)
+    cv2.rectangle(img, (342, 300), (420, 320), (0, 0, 220), -1)
+    box = cv2.boxPoints(((320 + seed % 7, 230), (80, 160), 4.0)).astype(np.int32)
+    cv2.fillPoly(img, [box], (0, 200, 0))
+    img = cv2.add(img, rng.integers(0, 6, img.shape, dtype=np.uint8))
+    ok, buf = cv2.imencode(".png", img)
+    assert ok
+    return buf.tobytes()
+
+
+def requests(seed: int) -> tuple[JudgeRequest, AnalyzeRequest, PlanRequest]:
+    cal = CameraCalibration(width=640, height=480, px_per_mm=4, cu=320, cv=240, y0_mm=0, z0_mm=0)
+    outcome = SkillOutcome(skill="align", goal=GOALS["align"], terminal=Pose(y=11.1, z=4.0), reached_goal=False,
+                           timed_out=False, compression_limit=False, image_png=camera_png(seed))
+    checks = [CheckResult(name="vision", passed=False, message="p_ey was too small.", measurements={"tilt_deg": 2.0})]
+    judge = JudgeRequest(task="insert the round peg", outcome=outcome, checks=checks,
+                         success_criteria="peg centred on the hole and within 5 deg of vertical",
+                         goal_image_png=camera_png(seed + 1000), calibration=cal)
+    verdict = JudgeReply(success=False, explanation="left of hole")
+    analyze = AnalyzeRequest(task=judge.task, outcome=outcome, checks=checks, verdict=verdict, goals=GOALS,
+                             history=[], calibration=cal, max_step_mm=5, skills=SKILLS)
+    analysis = AnalyzeReply(what_happened="-", why="-", how_to_recover="-", restart_from="align",
+                            motions=[{"skill": "align", "axis": "y", "delta": 2}])
+    plan = PlanRequest(task=judge.task, analysis=analysis, goals=GOALS, skills=SKILLS, max_step_mm=5)
+    return judge, analyze, plan
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--base-url", help="real OpenAI-compatible endpoint; default: local fake server")
+    parser.add_argument("--model", default="fake-vlm")
+    parser.add_argument("--api-key-env", default="OPENAI_API_KEY")
+    parser.add_argument("-n", type=int, default=20, help="calls per role")
+    args = parser.parse_args()
+
+    server = None
+    base_url = args.base_url
+    if base_url is None:
+        server = FakeOpenAIServer().start()
+        base_url = server.base_url
+        analysis = AnalyzeReply(what_happened="-", why="-", how_to_recover="-", restart_from="align")
+        for _ in range(args.n):
+            server.push(content({"success": False, "explanation": "left of hole"}),
+                        content(analysis.model_dump(mode="json")),
+                        tool_calls(("align", {"y": 14.0}), ("insert", {"z": -20.0})))
+    reasoner = RecordingReasoner(OpenAIReasoner(model=args.model, base_url=base_url, api_key_env=args.api_key_env,
+                                                timeout_s=120, max_retries=2))
+    try:
+        for i in range(args.n):
+            judge, analyze, plan = requests(i)
+            reasoner.judge(judge)
+            reasoner.analyze(analyze)
+            reasoner.plan(plan)
+    finally:
+        if server is not None:
+            server.stop()
+    print(f"endpoint: {base_url}  model: {args.model}  calls per role: {args.n}")
+    if server is not None:
+        sizes = [len(str(r)) for r in server.requests]
+        print(f"request body chars: median {statistics.median(sizes):.0f}")
+    print(f"{'role':8} {'median ms':>10} {'p95 ms':>8} {'tokens in':>10} {'tokens out':>10} {'attempts':>9}")
+    for role in ("judge", "analyze", "plan"):
+        recs = [r for r in reasoner.records if r.role == role]
+        lat = sorted(r.latency_s * 1000 for r in recs)
+        p95 = lat[min(len(lat) - 1, int(0.95 * len(lat)))]
+        print(f"{role:8} {statistics.median(lat):10.1f} {p95:8.1f} {sum(r.tokens_in for r in recs) / len(recs):10.0f}"
+              f" {sum(r.tokens_out for r in recs) / len(recs):10.0f} {sum(r.attempts for r in recs) / len(recs):9.2f}")
+
+
+if __name__ == "__main__":
+    t0 = time.perf_counter()
+    main()
+    print(f"total {time.perf_counter() - t0:.1f} s")
