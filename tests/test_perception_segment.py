@@ -133,7 +133,7 @@ def test_rejects_non_rgb_input() -> None:
 def test_hole_split_by_the_peg_in_front_keeps_its_centre() -> None:
     img = draw_scene(CALIB, None, HoleGeom(y=5.0, depth_mm=30.0))
     u0, _ = CALIB.to_pixel(5.0, 0.0)
-    img[150:200, int(u0) - 30 : int(u0) - 10] = (0, 230, 230)  # cyan bar cutting the red face in two
+    img[150:240, int(u0) - 30 : int(u0) - 10] = (0, 230, 230)  # cyan bar cutting the red face in two
     m = measure(img, CALIB)
     assert m.hole.center_mm[0] == pytest.approx(5.0, abs=0.6)
     assert m.hole.right_mm - m.hole.left_mm == pytest.approx(42.0, abs=1.0)

@@ -152,9 +152,9 @@ def _peg(contour: np.ndarray, calib: CameraCalibration, size: tuple[int, int]) -
 def measure(image_rgb: np.ndarray, calib: CameraCalibration, cfg: PerceptionConfig | None = None) -> SceneMeasurement:
     """Segment peg (largest cyan contour) and hole (largest red contour) and measure them.
 
-    The hole is the largest red contour, as in the paper; if the peg hides
-    part of the red face and splits it, the other red pieces that touch the
-    largest one's column span are merged so H_center stays the face's centre.
+    The hole is the largest red contour, as in the paper; if something in
+    front splits the red face, red pieces sharing its rows and no farther
+    away than its own width are merged, so H_center stays the face's centre.
     """
     cfg = cfg or PerceptionConfig()
     hsv = _to_hsv(image_rgb)
@@ -182,7 +182,8 @@ def _hole_contour(mask: np.ndarray, min_area: float) -> tuple[np.ndarray, float]
             continue
         x, y, w, h = cv2.boundingRect(c)
         overlaps_rows = y <= by + bh and by <= y + h
-        near_cols = x <= bx + bw + 2 and bx <= x + w + 2
+        gap = max(x - (bx + bw), bx - (x + w))  # horizontal gap, negative when overlapping
+        near_cols = gap <= bw
         if overlaps_rows and near_cols:
             parts.append(i)
     points = np.concatenate([contours[i] for i in parts])
