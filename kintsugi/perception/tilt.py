@@ -16,15 +16,17 @@ Two estimates are made:
   (or 90°). Every edge of the convex hull of a (clipped) rectangle is either
   parallel or perpendicular to the peg axis, except the cut itself and any
   image-border cut, so the length-weighted mean of hull-edge directions
-  folded modulo 90° gives the tilt in (-45, 45]. The peg never tilts 45° in
-  this task, so the fold is harmless there.
+  (each refined by ``cv2.fitLine`` on the contour pixels along it) folded
+  modulo 90° gives the tilt in (-45, 45]. The peg never tilts 45° in this
+  task, so the fold is harmless there.
 
 ``estimate_tilt`` uses minAreaRect's long side as the axis when the visible
 part is clearly elongated, both estimates agree modulo 90°, and it is not a
 board-cut stub whose long side is near horizontal (the value then comes from
 the finer edge fit, on the branch the rect picks); otherwise it uses the hull
-edges alone. So the full
-(-90, 90] range is kept for a wholly visible peg, and a stub reads within ±45°.
+edges alone. So the full (-90, 90] range is kept for a wholly visible peg, and
+a stub reads within ±45°. Known ambiguity: a peg lying flat (±90°) across the
+board line looks exactly like an upright stub and reads as ~0°.
 """
 
 from __future__ import annotations
