@@ -1,0 +1,84 @@
+"""Peg shapes and their matching holes, in metres.
+
+A hole is a convex polygon given as half-planes (outward normal angle, inset
+distance) so that one wall box per side reproduces it exactly; MuJoCo only
+collides convex geoms, so a round hole is a many-sided polygon.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass
+
+from kintsugi.errors import ConfigError
+from kintsugi.tasks.peg.config import PegTaskConfig
+
+MM = 1e-3
+
+
+@dataclass(frozen=True)
+class PegShape:
+    name: str
+    kind: str  # "cylinder" | "box" | "prism"
+    half_y: float  # half extent along y (the image plane)
+    half_x: float  # half extent along x (depth)
+    sides: int = 0  # prism only
+    circumradius: float = 0.0  # prism only
+
+    def prism_vertices(self, half_length: float) -> list[tuple[float, float, float]]:
+        """Vertices of a regular prism with one flat side facing +y."""
+        verts = []
+        for k in range(self.sides):
+            a = 2 * math.pi * k / self.sides + math.pi / self.sides
+            for z in (-half_length, half_length):
+                verts.append((self.circumradius * math.sin(a), self.circumradius * math.cos(a), z))
+        return verts
+
+
+@dataclass(frozen=True)
+class HoleShape:
+    """Half-planes (normal angle in the x-y plane from +y, distance from the axis)."""
+
+    sides: tuple[tuple[float, float], ...]
+    half_y: float  # half opening along y (for scoring and the red rim patch)
+
+
+SHAPES_HELP = "round, square, rectangle, or polygonN (regular N-sided prism, N >= 3)"
+
+
+def peg_shape(name: str, cfg: PegTaskConfig) -> PegShape:
+    p = cfg.peg
+    if name == "round":
+        r = p.diameter_mm / 2 * MM
+        return PegShape(name, "cylinder", r, r)
+    if name == "square":
+        h = p.square_mm / 2 * MM
+        return PegShape(name, "box", h, h)
+    if name == "rectangle":
+        return PegShape(name, "box", p.rectangle_mm[0] / 2 * MM, p.rectangle_mm[1] / 2 * MM)
+    m = re.fullmatch(r"polygon(\d+)", name)
+    if m and int(m.group(1)) >= 3:
+        n = int(m.group(1))
+        rc = p.polygon_circumradius_mm * MM
+        inradius = rc * math.cos(math.pi / n)
+        half_y = inradius if n % 2 == 0 else rc  # flat side faces +y
+        return PegShape(name, "prism", half_y, rc, sides=n, circumradius=rc)
+    raise ConfigError(f"unknown peg shape {name!r}; known: {SHAPES_HELP}")
+
+
+def hole_for(peg: PegShape, cfg: PegTaskConfig) -> HoleShape:
+    c = cfg.peg.clearance_mm / 2 * MM
+    if peg.kind == "cylinder":
+        n = cfg.hole.round_sides
+        sides = tuple((2 * math.pi * k / n, peg.half_y + c) for k in range(n))
+        return HoleShape(sides, peg.half_y + c)
+    if peg.kind == "box":
+        sides = ((0.0, peg.half_y + c), (math.pi, peg.half_y + c),
+                 (math.pi / 2, peg.half_x + c), (3 * math.pi / 2, peg.half_x + c))
+        return HoleShape(sides, peg.half_y + c)
+    n = peg.sides
+    inradius = peg.circumradius * math.cos(math.pi / n) + c
+    # Side normals of the prism: angles (from +y) at 2*pi*(k+1/2)/n + pi/n offset -> flat side faces +y.
+    sides = tuple((2 * math.pi * k / n, inradius) for k in range(n))
+    return HoleShape(sides, inradius if n % 2 == 0 else peg.circumradius + c)

@@ -1,0 +1,125 @@
+"""Goal-conditioned skills, one per contact formation (CF0..CF4).
+
+Each skill moves the wrist base in position control at bounded speed toward a
+goal on its own axes ("—" axes keep the previous goal), and ends at the goal
+(after a short settle), on a timeout, or at once when the wrist's z spring
+passes the compression limit.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from kintsugi.tasks.peg.world import PegWorld
+
+AXES = ("y", "z", "roll")
+
+
+@dataclass(frozen=True)
+class SkillSpec:
+    name: str
+    cf: int
+    axes: tuple[str, ...]
+    description: str
+
+
+SKILLS: dict[str, SkillSpec] = {
+    s.name: s
+    for s in (
+        SkillSpec("approach", 0, ("y", "z", "roll"), "move close above the board, no contact"),
+        SkillSpec("contact", 1, ("z",), "go straight down until the peg touches the surface"),
+        SkillSpec("fit", 2, ("y",), "slide until the peg's tip drops in and touches the hole's edge"),
+        SkillSpec("align", 3, ("y",), "translate so the compliant wrist rotates the peg upright"),
+        SkillSpec("insert", 4, ("z",), "push the peg down into the hole"),
+    )
+}
+SEQUENCE = tuple(SKILLS)
+
+
+@dataclass
+class SkillResult:
+    skill: str
+    goal: np.ndarray  # full [y, z, roll] goal (m, rad)
+    terminal: np.ndarray  # base pose at the end
+    reached: bool
+    timed_out: bool
+    compression_limit: bool
+    compression: float  # z-spring compression at the end (m)
+    max_compression: float
+    image: np.ndarray = field(repr=False)
+    sim_time: float = 0.0
+
+
+def merge_goal(previous: np.ndarray, skill: str, values: dict[str, float]) -> np.ndarray:
+    """A full goal from the previous one and the skill's own axes (others keep their value)."""
+    goal = previous.copy()
+    for axis in SKILLS[skill].axes:
+        if axis in values:
+            goal[AXES.index(axis)] = values[axis]
+    return goal
+
+
+def execute_skill(
+    world: PegWorld,
+    skill: str,
+    goal: np.ndarray,
+    on_tick: Callable[[PegWorld], None] | None = None,
+) -> SkillResult:
+    """Drive the base toward `goal`; return terminal pose, image and flags."""
+    ctl = world.cfg.control
+    dt = 1.0 / ctl.rate_hz
+    n_sub = max(1, round(dt / world.model.opt.timestep))
+    dt = n_sub * world.model.opt.timestep
+    v_lin = ctl.speed_mm_s * 1e-3 * dt
+    v_rot = math.radians(ctl.rot_speed_deg_s) * dt
+    tol = ctl.pose_tol_mm * 1e-3
+    limit = ctl.compression_limit_mm * 1e-3
+    t0 = world.data.time
+    pose = world.base_pose()
+    reached = halted = False
+    settle_left = ctl.settle_s
+    max_comp = 0.0
+    while True:
+        elapsed = world.data.time - t0
+        if elapsed >= ctl.timeout_s:
+            break
+        if not reached:
+            pose = _step_toward(pose, goal, v_lin, v_rot)
+            world.set_base(pose)
+            reached = bool(np.all(pose == goal))
+        world.step(n_sub)
+        comp = world.wrist_compression()
+        max_comp = max(max_comp, comp)
+        if on_tick is not None:
+            on_tick(world)
+        if comp > limit:
+            halted = True
+            break
+        if reached:
+            settle_left -= dt
+            if settle_left <= 0 and (world.wrist_is_still() or settle_left <= ctl.settle_s - ctl.settle_max_s):
+                break
+    terminal = world.base_pose()
+    err = np.abs(terminal - goal)
+    ok = bool(np.hypot(err[0], err[1]) <= tol and err[2] <= math.radians(1.0))
+    return SkillResult(
+        skill=skill, goal=goal.copy(), terminal=terminal, reached=ok and not halted,
+        timed_out=not reached and not halted, compression_limit=halted,
+        compression=world.wrist_compression(), max_compression=max_comp,
+        image=world.render(), sim_time=world.data.time - t0,
+    )
+
+
+def _step_toward(pose: np.ndarray, goal: np.ndarray, v_lin: float, v_rot: float) -> np.ndarray:
+    """One bounded-speed step along the straight line to the goal (exact arrival)."""
+    out = pose.copy()
+    d = goal[:2] - pose[:2]
+    dist = float(np.hypot(*d))
+    out[:2] = goal[:2] if dist <= v_lin else pose[:2] + d * (v_lin / dist)
+    dr = goal[2] - pose[2]
+    out[2] = goal[2] if abs(dr) <= v_rot else pose[2] + math.copysign(v_rot, dr)
+    return out

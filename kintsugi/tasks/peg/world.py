@@ -1,0 +1,169 @@
+"""The peg-insertion world: MuJoCo model + data, robot-side sensors, ground truth.
+
+`PegWorld` owns the physics. Methods and reasoners only ever get a `PegRobot`
+view (base pose, wrist compression/force, camera image and calibration);
+`ground_truth()` exists for scoring and lives on the world, not the robot.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+import mujoco
+import numpy as np
+
+from kintsugi.config import StrictModel
+from kintsugi.errors import SimulationDiverged, UnknownNameError
+from kintsugi.reasoning.types import CameraCalibration
+from kintsugi.tasks.peg.config import PegTaskConfig
+from kintsugi.tasks.peg.scene import build_mjcf
+from kintsugi.tasks.peg.shapes import MM, hole_for, peg_shape
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+
+HOME_POSE = np.array([-0.05, 0.16, 0.0])  # y, z (m), roll (rad)
+SUCCESS_DEPTH = 0.010
+_FATAL_WARNINGS = (
+    mujoco.mjtWarning.mjWARN_BADQACC,
+    mujoco.mjtWarning.mjWARN_BADQPOS,
+    mujoco.mjtWarning.mjWARN_BADQVEL,
+    mujoco.mjtWarning.mjWARN_CONTACTFULL,
+    mujoco.mjtWarning.mjWARN_CNSTRFULL,
+)
+
+
+class TrialParams(StrictModel):
+    """The randomized truth of one trial (hidden from methods; recorded for analysis)."""
+
+    shape: str
+    hole_y_mm: float = 0.0
+    friction_scale: float = 1.0
+    grasp_angle_deg: float = 0.0
+
+
+class GroundTruth(StrictModel):
+    tip_depth_mm: float
+    tip_offset_mm: float
+    inside_hole: bool
+    success: bool
+
+
+def _resolve(model: mujoco.MjModel, objtype: mujoco.mjtObj, name: str) -> int:
+    idx = mujoco.mj_name2id(model, objtype, name)
+    if idx < 0:
+        count = {mujoco.mjtObj.mjOBJ_BODY: model.nbody, mujoco.mjtObj.mjOBJ_JOINT: model.njnt,
+                 mujoco.mjtObj.mjOBJ_SITE: model.nsite, mujoco.mjtObj.mjOBJ_GEOM: model.ngeom,
+                 mujoco.mjtObj.mjOBJ_CAMERA: model.ncam}[objtype]
+        known = [mujoco.mj_id2name(model, objtype, i) for i in range(count)]
+        raise UnknownNameError(f"no {objtype.name} named {name!r}; known: {', '.join(filter(None, known))}")
+    return idx
+
+
+class PegWorld:
+    def __init__(self, cfg: PegTaskConfig, params: TrialParams) -> None:
+        self.cfg = cfg
+        self.params = params
+        self.peg = peg_shape(params.shape, cfg)
+        self.hole = hole_for(self.peg, cfg)
+        self.model = mujoco.MjModel.from_xml_string(build_mjcf(self.peg, self.hole, cfg))
+        m = self.model
+        obj = mujoco.mjtObj
+        self._board = _resolve(m, obj.mjOBJ_BODY, "board")
+        self._peg_body = _resolve(m, obj.mjOBJ_BODY, "peg")
+        self._tip = _resolve(m, obj.mjOBJ_SITE, "peg_tip")
+        self._camera = _resolve(m, obj.mjOBJ_CAMERA, "scene")
+        self._mocap = m.body_mocapid[_resolve(m, obj.mjOBJ_BODY, "base")]
+        jz = _resolve(m, obj.mjOBJ_JOINT, "wrist_z")
+        self._qz = m.jnt_qposadr[jz]
+        self._wrist_j = [_resolve(m, obj.mjOBJ_JOINT, j) for j in ("wrist_z", "wrist_roll", "wrist_pitch", "wrist_yaw")]
+        self._wrist_q = [m.jnt_qposadr[j] for j in self._wrist_j]
+        # Trial truth applied to the compiled model.
+        m.body_pos[self._board, 1] = params.hole_y_mm * MM
+        for g in range(m.ngeom):
+            if m.geom_bodyid[g] == self._board:
+                m.geom_friction[g, 0] = cfg.hole.friction * params.friction_scale
+        m.body_quat[self._peg_body] = _roll_quat(math.radians(params.grasp_angle_deg))
+        sag = m.body_subtreemass[_resolve(m, obj.mjOBJ_BODY, "wrist_z")] * 9.81 / cfg.wrist.z_stiffness
+        if cfg.wrist.gravity_preload:
+            m.qpos_spring[self._qz] = sag
+        self._z_rest = float(m.qpos_spring[self._qz] - sag)  # hanging equilibrium
+        self.data = mujoco.MjData(m)
+        self.set_base(HOME_POSE)
+        mujoco.mj_forward(m, self.data)
+        self._renderer: mujoco.Renderer | None = None
+        self.steps = 0
+
+    # --- actuation -------------------------------------------------------
+    def set_base(self, pose: np.ndarray) -> None:
+        """Command the wrist base (mocap) to pose [y, z, roll] in metres/radians."""
+        self.data.mocap_pos[self._mocap] = (0.0, pose[0], pose[1])
+        self.data.mocap_quat[self._mocap] = _roll_quat(pose[2])
+
+    def step(self, n: int) -> None:
+        mujoco.mj_step(self.model, self.data, nstep=n)
+        self.steps += n
+        self.check_health()
+
+    def check_health(self) -> None:
+        for w in _FATAL_WARNINGS:
+            if self.data.warning[w].number > 0:
+                raise SimulationDiverged(
+                    f"MuJoCo warning {w.name} at t={self.data.time:.3f}s; lower sim.timestep_s "
+                    "or raise sim.contact_timeconst_s"
+                )
+        if not np.all(np.isfinite(self.data.qpos)):
+            raise SimulationDiverged(f"non-finite state at t={self.data.time:.3f}s")
+
+    # --- robot-side sensing ---------------------------------------------
+    def base_pose(self) -> np.ndarray:
+        pos = self.data.mocap_pos[self._mocap]
+        q = self.data.mocap_quat[self._mocap]
+        return np.array([pos[1], pos[2], 2 * math.atan2(q[1], q[0])])
+
+    def wrist_compression(self) -> float:
+        """Upward z-spring deflection from the hanging rest (m); positive = compressed.
+
+        This is what a tared wrist force sensor reports, divided by the stiffness.
+        """
+        return float(self.data.qpos[self._qz] - self._z_rest)
+
+    def wrist_deflection(self) -> np.ndarray:
+        """Deflection of the four wrist springs (z m, roll, pitch, yaw rad) from rest."""
+        return np.array([self.data.qpos[a] - self.model.qpos_spring[a] for a in self._wrist_q])
+
+    def wrist_is_still(self, lin: float = 0.005, ang: float = 0.05) -> bool:
+        """True when the wrist springs have stopped swinging (what a tared F/T sensor sees settle)."""
+        v = [self.data.qvel[self.model.jnt_dofadr[j]] for j in self._wrist_j]
+        return abs(v[0]) < lin and max(abs(x) for x in v[1:]) < ang
+
+    def render(self) -> np.ndarray:
+        if self._renderer is None:
+            self._renderer = mujoco.Renderer(self.model, self.cfg.camera.height, self.cfg.camera.width)
+        self._renderer.update_scene(self.data, camera=self._camera)
+        return self._renderer.render().copy()
+
+    def calibration(self) -> CameraCalibration:
+        c = self.cfg.camera
+        return CameraCalibration(
+            width=c.width, height=c.height, px_per_mm=c.height / c.view_height_mm,
+            cu=c.width / 2, cv=c.height / 2, y0_mm=c.center_y_mm, z0_mm=c.center_z_mm,
+        )
+
+    def close(self) -> None:
+        if self._renderer is not None:
+            self._renderer.close()
+            self._renderer = None
+
+    # --- ground truth: scoring only -------------------------------------
+    def ground_truth(self) -> GroundTruth:
+        tip = self.data.site_xpos[self._tip]
+        offset = tip[1] - self.params.hole_y_mm * MM
+        inside = abs(offset) <= self.hole.half_y and tip[2] < 0
+        depth = -tip[2]
+        return GroundTruth(tip_depth_mm=depth / MM, tip_offset_mm=offset / MM, inside_hole=bool(inside),
+                           success=bool(inside and depth >= SUCCESS_DEPTH))
+
+
+def _roll_quat(angle: float) -> np.ndarray:
+    return np.array([math.cos(angle / 2), math.sin(angle / 2), 0.0, 0.0])
