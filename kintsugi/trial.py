@@ -115,3 +115,38 @@ def run_trial(spec: TrialSpec) -> TrialRecord:
             error=f"{type(exc).__name__}: {exc}\n{traceback.format_exc(limit=4)}",
         )
     return record.model_copy(update={"wall_time": time.perf_counter() - start})
+
+
+class TrialLog:
+    """What a method reports while it runs: skills, events, recovery transitions, transcript.
+
+    `echo` (optional) tells the story live on a console; `status` feeds video overlays.
+    """
+
+    def __init__(self, echo=None, on_status=None) -> None:  # noqa: ANN001 - plain callables
+        self.skills: list[SkillLog] = []
+        self.events: list[Event] = []
+        self.transitions: list[tuple[str, str]] = []
+        self.transcript: list[dict[str, Any]] = []
+        self.executions: dict[str, int] = {}
+        self._echo = echo
+        self._on_status = on_status
+
+    def skill(self, entry: SkillLog) -> None:
+        self.skills.append(entry)
+        self.executions[entry.skill] = self.executions.get(entry.skill, 0) + 1
+
+    def event(self, t: float, kind: str, detail: str = "") -> None:
+        self.events.append(Event(t=round(t, 4), kind=kind, detail=detail))
+        self.say(f"[dim]{t:6.2f}s[/dim] {kind}: {detail}")
+
+    def transition(self, failed: str, first_recovery: str) -> None:
+        self.transitions.append((failed, first_recovery))
+
+    def say(self, text: str) -> None:
+        if self._echo is not None:
+            self._echo(text)
+
+    def status(self, label: str, verdict: str | None = None) -> None:
+        if self._on_status is not None:
+            self._on_status(label, verdict)

@@ -71,7 +71,7 @@ class ControlSection(StrictModel):
     """Minimum wait at the goal; then wait (up to settle_max_s) until the wrist stops swinging."""
     settle_max_s: float = Field(1.5, ge=0)
     timeout_s: float = Field(6.0, gt=0)
-    compression_limit_mm: float = Field(12.0, gt=0)
+    compression_limit_mm: float = Field(20.0, gt=0)
     """The running skill halts at once when the z spring is compressed beyond this."""
 
 

@@ -8,7 +8,6 @@ view (base pose, wrist compression/force, camera image and calibration);
 from __future__ import annotations
 
 import math
-import os
 
 import mujoco
 import numpy as np
@@ -20,7 +19,6 @@ from kintsugi.tasks.peg.config import PegTaskConfig
 from kintsugi.tasks.peg.scene import build_mjcf
 from kintsugi.tasks.peg.shapes import MM, hole_for, peg_shape
 
-os.environ.setdefault("MUJOCO_GL", "egl")
 
 HOME_POSE = np.array([-0.05, 0.16, 0.0])  # y, z (m), roll (rad)
 SUCCESS_DEPTH = 0.010
