@@ -1,0 +1,104 @@
+"""Write report.md and a self-contained report.html next to a campaign's results.jsonl."""
+
+from __future__ import annotations
+
+import base64
+import datetime as _dt
+import html
+import json
+import os
+import platform
+import sys
+from pathlib import Path
+from typing import Sequence
+
+import kintsugi
+from kintsugi.campaign.plan import CampaignConfig
+from kintsugi.campaign.plots import extra_executions_plot, success_plot
+from kintsugi.campaign.render import to_html, to_markdown
+from kintsugi.campaign.store import ResultStore
+from kintsugi.campaign.tables import all_tables
+from kintsugi.trial import TrialRecord
+
+_CSS = """
+body{font-family:system-ui,sans-serif;margin:2em;max-width:1200px;color:#222}
+table{border-collapse:collapse;margin:.5em 0}th,td{border:1px solid #ccc;padding:.25em .6em}
+th{background:#f3f3f3}td.r{text-align:right;font-variant-numeric:tabular-nums}td.l{text-align:left}
+p.note{color:#666;font-size:.85em;margin:.2em 0}pre{background:#f7f7f7;padding:1em;overflow:auto}
+img{max-width:100%}
+"""
+
+
+def machine_info() -> dict[str, str]:
+    """Where the numbers came from (timings depend on it)."""
+    try:
+        import mujoco
+
+        mj = mujoco.__version__
+    except Exception:  # noqa: BLE001 - a report must not fail on a missing optional import
+        mj = "not installed"
+    return {
+        "date": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
+        "platform": platform.platform(),
+        "processor": platform.processor() or platform.machine(),
+        "cpu_count": str(os.cpu_count()),
+        "python": sys.version.split()[0],
+        "mujoco": mj,
+        "kintsugi": kintsugi.__version__,
+    }
+
+
+def _records_for(cfg: CampaignConfig, records: Sequence[TrialRecord]) -> list[TrialRecord]:
+    from kintsugi.campaign.plan import expand
+
+    wanted = {s.key for s in expand(cfg)}
+    return [r for r in records if r.key in wanted]
+
+
+def write_report(
+    out_dir: str | Path,
+    cfg: CampaignConfig | None = None,
+    records: Sequence[TrialRecord] | None = None,
+) -> tuple[Path, Path]:
+    """Write report.md and report.html into `out_dir`; config and records default to what it holds.
+
+    Only records belonging to the config's trials are reported (a campaign whose
+    trial count shrank keeps its extra lines on disk, but they are not counted).
+    """
+    out = Path(out_dir)
+    store = ResultStore(out)
+    cfg = cfg or store.load_config()
+    recs = _records_for(cfg, store.read() if records is None else records)
+    tables = all_tables(recs, cfg)
+    info = machine_info()
+    cfg_json = json.dumps(cfg.model_dump(mode="json"), indent=2)
+    summary = f"{len(recs)} of {len(cfg.cells()) * cfg.trials} trials recorded; task `{cfg.task}`."
+
+    md = [f"# kintsugi campaign report — {cfg.task}", "", summary, ""]
+    md += [to_markdown(t) for t in tables]
+    md += ["## Campaign config", "", "```json", cfg_json, "```", "", "## Machine", ""]
+    md += [f"- {k}: {v}" for k, v in info.items()]
+    md_path = out / "report.md"
+    md_path.write_text("\n".join(md) + "\n")
+
+    images = [success_plot(recs, cfg) if recs else None, extra_executions_plot(recs, cfg)]
+    figs = "".join(
+        f'<img alt="campaign plot" src="data:image/png;base64,{base64.b64encode(png).decode()}">'
+        for png in images if png
+    )
+    esc = html.escape
+    body = [
+        f"<h1>kintsugi campaign report — {esc(cfg.task)}</h1><p>{esc(summary)}</p>",
+        *[to_html(t) for t in tables],
+        f"<h2>Plots</h2>{figs}" if figs else "",
+        f"<h2>Campaign config</h2><pre>{esc(cfg_json)}</pre>",
+        "<h2>Machine</h2><ul>" + "".join(f"<li>{esc(k)}: {esc(v)}</li>" for k, v in info.items()) + "</ul>",
+    ]
+    page = (
+        '<!doctype html><html><head><meta charset="utf-8">'
+        f"<title>kintsugi report — {esc(cfg.task)}</title><style>{_CSS}</style></head>"
+        f"<body>{''.join(body)}</body></html>\n"
+    )
+    html_path = out / "report.html"
+    html_path.write_text(page)
+    return md_path, html_path
