@@ -46,7 +46,7 @@ MAX_ATTEMPTS = 2
 
 IMAGE_LABELS = {
     "outcome.image_png": "terminal camera image at the end of the skill",
-    "goal_image_png": "goal image: what a successful insertion looks like",
+    "goal_image_png": "goal image: this skill's terminal image in the default condition (what success looks like)",
 }
 
 M = TypeVar("M", bound=BaseModel)

@@ -106,6 +106,9 @@ class AnalyzeRequest(StrictModel):
     skills: dict[str, list[Axis]] = Field(
         default_factory=dict, description="recovery skill -> the axes it controls (fit [y], align [y], insert [z])"
     )
+    goal_image_png: bytes | None = Field(
+        default=None, repr=False, description="I_g: the failed skill's terminal image in the default condition"
+    )
 
 
 class RelativeMotion(StrictModel):

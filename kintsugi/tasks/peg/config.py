@@ -11,6 +11,7 @@ from typing import Literal
 from pydantic import Field
 
 from kintsugi.config import Range, StrictModel
+from kintsugi.perception.segment import PerceptionConfig
 
 
 class PegSection(StrictModel):
@@ -90,6 +91,17 @@ class SimSection(StrictModel):
     noslip_iterations: int = Field(0, ge=0)
 
 
+class RecoverySection(StrictModel):
+    max_consecutive_failures: int = Field(10, ge=1)
+    """The paper's timeout: this many failed executions in a row end the trial as a failure."""
+    max_executions: int = Field(40, ge=3)
+    """Hard cap on skill executions in one trial, whatever the verdicts."""
+    max_step_mm: float = Field(10.0, gt=0)
+    """Largest change of one goal per recovery (the paper's real-robot failure was an over-large update)."""
+    workspace_y_mm: Range = (-120.0, 120.0)
+    workspace_z_mm: Range = (100.0, 200.0)
+
+
 class PegTaskConfig(StrictModel):
     peg: PegSection = PegSection()
     hole: HoleSection = HoleSection()
@@ -98,6 +110,8 @@ class PegTaskConfig(StrictModel):
     control: ControlSection = ControlSection()
     camera: CameraSection = CameraSection()
     sim: SimSection = SimSection()
+    recovery: RecoverySection = RecoverySection()
+    perception: PerceptionConfig = PerceptionConfig()
 
 
 Condition = Literal["none", "friction", "pose", "all"]

@@ -1,0 +1,213 @@
+"""The embedded reasoner: deterministic, offline, and limited to what a VLM would see.
+
+It decodes the same PNGs a model would receive, measures them with its own
+OpenCV pass (peg/hole positions, tilt, whether the peg's outline continues
+below the board line, i.e. is inside the hole), reads the check messages and
+the robot's poses and wrist force, and answers each role with rules a person
+would apply looking at the picture. It never touches the simulator.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from kintsugi.perception.segment import PerceptionConfig, board_surface_v, measure, peg_mask
+from kintsugi.reasoning import REASONERS
+from kintsugi.reasoning.types import (
+    AnalyzeReply,
+    AnalyzeRequest,
+    CameraCalibration,
+    JudgeReply,
+    JudgeRequest,
+    PlanReply,
+    PlanRequest,
+    PlanStep,
+    RelativeMotion,
+)
+from kintsugi.trial import ReasonerSettings
+
+RECOVERY_ORDER = ("fit", "align", "insert")
+PIVOT_MM = 140.0
+"""Rough lever from the wrist to the peg tip: base shift that tilts a peg pivoting in the hole by 1 rad."""
+ALIGN_GAIN = 0.8
+"""Fraction of the tilt correction to apply at once (the wrist absorbs part of any base motion)."""
+
+
+@dataclass(frozen=True)
+class Seen:
+    """What the embedded reasoner measures on one image (mm, degrees)."""
+
+    peg: bool
+    hole: bool
+    peg_y: float = 0.0
+    peg_edge_y: float = 0.0
+    hole_y: float = 0.0
+    tilt: float = 0.0
+    in_hole: bool = False
+    peg_top_z: float = 0.0
+
+    @property
+    def offset(self) -> float:
+        return self.peg_y - self.hole_y
+
+
+def decode_png(png: bytes) -> np.ndarray:
+    img = cv2.imdecode(np.frombuffer(png, np.uint8), cv2.IMREAD_COLOR)
+    if img is None:
+        raise ValueError("image is not a decodable PNG")
+    return cv2.cvtColor(img, cv2.COLOR_BGR2RGB)
+
+
+def look(png: bytes | None, calib: CameraCalibration, cfg: PerceptionConfig) -> Seen:
+    """Measure an image; `in_hole` = the peg's outline is cut wide by the board line."""
+    if png is None:
+        return Seen(peg=False, hole=False)
+    rgb = decode_png(png)
+    scene = measure(rgb, calib, cfg)
+    if scene.peg is None or scene.hole is None:
+        return Seen(peg=scene.peg is not None, hole=scene.hole is not None)
+    mask = peg_mask(rgb, cfg) > 0
+    v_surface = board_surface_v(rgb)
+    in_hole = False
+    if v_surface is not None:
+        rows = mask.sum(axis=1)
+        row = int(v_surface) - 2
+        body = rows[rows > 0]
+        width = float(np.median(body)) if body.size else 0.0
+        in_hole = 0 <= row < len(rows) and width > 0 and rows[row] >= 0.5 * width
+    p, h = scene.peg, scene.hole
+    return Seen(peg=True, hole=True, peg_y=p.center_mm[0], peg_edge_y=p.edge_mm[0], hole_y=h.center_mm[0],
+                tilt=p.tilt_deg, in_hole=bool(in_hole), peg_top_z=p.top_mm)
+
+
+class EmbeddedReasoner:
+    name = "embedded"
+
+    def __init__(self, perception: PerceptionConfig | None = None) -> None:
+        self.cfg = perception or PerceptionConfig()
+        self.last_stats = None
+
+    # --- judge: fuse the checks into one verdict -----------------------
+    def judge(self, req: JudgeRequest) -> JudgeReply:
+        checks = {c.name: c for c in req.checks}
+        out = req.outcome
+        if out.compression_limit:
+            return JudgeReply(success=False, explanation=(
+                f"The wrist hit its compression limit ({out.wrist_force_z_n:.1f} N): the peg is blocked, "
+                f"so {out.skill} failed whatever the image shows."))
+        if "pose" in checks and not checks["pose"].passed:
+            return JudgeReply(success=False, explanation=f"The arm did not reach its goal: {checks['pose'].message}")
+        seen = look(out.image_png, req.calibration, self.cfg)
+        if not (seen.peg and seen.hole):
+            return JudgeReply(success=False, explanation="The camera cannot see both the peg and the hole.")
+        where = f"peg centre {seen.offset:+.1f} mm from the hole centre, tilt {seen.tilt:+.1f} deg"
+        if out.skill == "fit":
+            vision = checks.get("vision_fit")
+            table = vision.message if vision else "no vision check"
+            if seen.in_hole:  # the formation's purpose; align corrects any residual offset or tilt
+                note = "" if vision and vision.passed else f" (Table I says '{table}'; align will correct it)"
+                return JudgeReply(success=True, explanation=(
+                    f"Fit succeeded: the peg's outline is cut by the board line, so its tip is in the hole{note} "
+                    f"({where})."))
+            return JudgeReply(success=False, explanation=(
+                f"Fit failed: the peg's outline ends on the board surface, so the tip is not in the hole "
+                f"(Table I: '{table}'; {where})."))
+        if out.skill == "align":
+            vision = checks.get("vision_align")
+            ok = bool(vision and vision.passed) and seen.in_hole
+            why = (vision.message if vision and not vision.passed else
+                   "the peg is upright over the hole" if ok else "the peg has left the hole")
+            return JudgeReply(success=ok, explanation=f"Align {'succeeded' if ok else 'failed'}: {why} ({where}).")
+        image = checks.get("insert_image")
+        if image is None:
+            return JudgeReply(success=False, explanation="Insert failed: no goal-image comparison was given.")
+        diff = image.measurements.get("top_difference_mm", float("inf"))
+        deep = abs(diff) <= self.cfg.insert_top_tol_mm
+        centred = abs(seen.offset) <= self.cfg.align_tol_mm + 2.0
+        ok = deep and seen.in_hole and centred
+        if ok:
+            why = (f"the peg stands as low as in the goal image (top {diff:+.1f} mm from it) and is centred on the "
+                   f"hole ({where})")
+            if not image.passed:
+                why += "; the image comparison's position mismatch only reflects where this hole is"
+        else:
+            why = image.message if not deep else f"the peg is not centred in the hole ({where})"
+        return JudgeReply(success=ok, explanation=f"Insert {'succeeded' if ok else 'failed'}: {why}")
+
+    # --- analyze: what happened, why, how to recover ---------------------
+    def analyze(self, req: AnalyzeRequest) -> AnalyzeReply:
+        seen = look(req.outcome.image_png, req.calibration, self.cfg)
+        goal = look(req.goal_image_png, req.calibration, self.cfg)
+        skill = req.outcome.skill
+        want = goal.offset if (goal.peg and goal.hole) else 0.0  # taught peg-to-hole offset for this skill
+        if not (seen.peg and seen.hole):
+            return self._reply(skill, "the camera could not see the peg and the hole", "unknown",
+                               skill if skill in RECOVERY_ORDER else "fit", [])
+        state = (f"peg centre {seen.offset:+.1f} mm from the hole centre (taught: {want:+.1f} mm), tilt "
+                 f"{seen.tilt:+.1f} deg, tip {'inside' if seen.in_hole else 'outside'} the hole")
+        if skill == "fit" or not seen.in_hole:
+            return self._refit(skill, seen, want if skill == "fit" else None, state)
+        return self._realign(req, skill, seen, state)
+
+    def _refit(self, skill: str, seen: Seen, want: float | None, state: str) -> AnalyzeReply:
+        """The tip is not (or not properly) in the hole: slide again, shifted toward it."""
+        if want is not None:
+            shift = want - seen.offset
+            if seen.in_hole:  # in, but Table I says the centre passed the hole centre
+                shift = min(shift, -(seen.offset) - 2.0)
+            elif abs(shift) < 2.0:
+                shift = 3.0  # at the taught place yet still on the surface: slide a little further
+        else:  # the peg left the hole during align/insert: slide so the tip meets the hole's near side
+            shift = -seen.offset - 6.0 if seen.offset > 0 else min(-seen.offset, 8.0)
+        why = ("the fit goal does not match where the hole is (hole pose error, grasp angle or friction drag)"
+               if skill == "fit" else f"the peg slipped out of the hole during {skill}")
+        how = f"run fit again with its y goal moved {shift:+.1f} mm, then align (same shift) and insert"
+        motions = [RelativeMotion(skill="fit", axis="y", delta=round(shift, 2)),
+                   RelativeMotion(skill="align", axis="y", delta=round(shift, 2))]
+        return self._reply(skill, state, why, "fit", motions, how)
+
+    def _realign(self, req: AnalyzeRequest, skill: str, seen: Seen, state: str) -> AnalyzeReply:
+        """Tip in the hole: rotate the peg upright and centre it by moving the align goal."""
+        tilt_shift = ALIGN_GAIN * PIVOT_MM * math.tan(math.radians(seen.tilt)) if abs(seen.tilt) > 1.0 else 0.0
+        centre_shift = -seen.offset if abs(seen.offset) > 1.0 else 0.0
+        shift = tilt_shift + centre_shift
+        if skill == "insert" and abs(shift) < 1.0:
+            shift = 1.5 if seen.tilt >= 0 else -1.5  # jammed although it looks aligned: nudge toward upright
+        why = ("the peg is still tilted in the hole" if abs(tilt_shift) >= abs(centre_shift)
+               else "the peg is upright but off the hole centre")
+        if skill == "insert":
+            why = f"insertion jammed: {why}"
+        how = f"move the align goal {shift:+.1f} mm in y, then insert again"
+        motions = [RelativeMotion(skill="align", axis="y", delta=round(shift, 2))]
+        return self._reply(skill, state, why, "align", motions, how)
+
+    @staticmethod
+    def _reply(skill: str, state: str, why: str, restart: str, motions: list[RelativeMotion],
+               how: str = "repeat the skill") -> AnalyzeReply:
+        return AnalyzeReply(what_happened=f"{skill} failed: {state}.", why=why, how_to_recover=how,
+                            restart_from=restart, motions=motions)
+
+    # --- plan: absolute goals from the analysis -------------------------
+    def plan(self, req: PlanRequest) -> PlanReply:
+        start = RECOVERY_ORDER.index(req.analysis.restart_from)
+        steps = []
+        for skill in RECOVERY_ORDER[start:]:
+            if skill not in req.skills:
+                continue
+            current = req.goals[skill]
+            goal = {}
+            for axis in req.skills[skill]:
+                delta = sum(m.delta for m in req.analysis.motions if m.skill == skill and m.axis == axis)
+                goal[axis] = round(getattr(current, axis) + delta, 3)
+            steps.append(PlanStep(skill=skill, goal=goal))
+        return PlanReply(steps=steps)
+
+
+@REASONERS.register("embedded", "deterministic offline reasoner: OpenCV on the images + rules, no model",
+                    tags=("offline",))
+def make_embedded(settings: ReasonerSettings) -> EmbeddedReasoner:
+    return EmbeddedReasoner()
