@@ -49,6 +49,8 @@ class Seen:
     tilt: float = 0.0
     in_hole: bool = False
     peg_top_z: float = 0.0
+    tip_y: float = 0.0
+    """Middle of the peg's bottom face (of its visible part, when the rest is in the hole)."""
 
     @property
     def offset(self) -> float:
@@ -79,9 +81,13 @@ def look(png: bytes | None, calib: CameraCalibration, cfg: PerceptionConfig) -> 
         body = rows[rows > 0]
         width = float(np.median(body)) if body.size else 0.0
         in_hole = 0 <= row < len(rows) and width > 0 and rows[row] >= 0.5 * width
+    contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
+    box = cv2.boxPoints(cv2.minAreaRect(max(contours, key=cv2.contourArea)))
+    bottom = box[np.argsort(box[:, 1])[-2:]].mean(axis=0)  # middle of the peg's bottom face
+    tip_y = calib.to_plane(float(bottom[0]), float(bottom[1]))[0]
     p, h = scene.peg, scene.hole
     return Seen(peg=True, hole=True, peg_y=p.center_mm[0], peg_edge_y=p.edge_mm[0], hole_y=h.center_mm[0],
-                tilt=p.tilt_deg, in_hole=bool(in_hole), peg_top_z=p.top_mm)
+                tilt=p.tilt_deg, in_hole=bool(in_hole), peg_top_z=p.top_mm, tip_y=tip_y)
 
 
 class EmbeddedReasoner:
@@ -147,22 +153,22 @@ class EmbeddedReasoner:
         if not (seen.peg and seen.hole):
             return self._reply(skill, "the camera could not see the peg and the hole", "unknown",
                                skill if skill in RECOVERY_ORDER else "fit", [])
-        state = (f"peg centre {seen.offset:+.1f} mm from the hole centre (taught: {want:+.1f} mm), tilt "
+        state = (f"peg centre {seen.offset:+.1f} mm from the hole centre (taught: {want:+.1f} mm), peg tip "
+                 f"{seen.tip_y - seen.hole_y:+.1f} mm from it, tilt "
                  f"{seen.tilt:+.1f} deg, tip {'inside' if seen.in_hole else 'outside'} the hole")
         if skill == "fit" or not seen.in_hole:
-            return self._refit(skill, seen, want if skill == "fit" else None, state)
+            tries = sum(1 for a in req.history if a.skill == "fit" and not a.success)
+            return self._refit(skill, seen, want if skill == "fit" else None, state, tries)
         return self._realign(req, skill, seen, state)
 
-    def _refit(self, skill: str, seen: Seen, want: float | None, state: str) -> AnalyzeReply:
-        """The tip is not (or not properly) in the hole: slide again, shifted toward it."""
-        if want is not None:
-            shift = want - seen.offset
-            if seen.in_hole:  # in, but Table I says the centre passed the hole centre
-                shift = min(shift, -(seen.offset) - 2.0)
-            elif abs(shift) < 2.0:
-                shift = 3.0  # at the taught place yet still on the surface: slide a little further
-        else:  # the peg left the hole during align/insert: slide so the tip meets the hole's near side
-            shift = -seen.offset - 6.0 if seen.offset > 0 else min(-seen.offset, 8.0)
+    def _refit(self, skill: str, seen: Seen, want: float | None, state: str, tries: int) -> AnalyzeReply:
+        """The tip is not (or not properly) in the hole: slide again so the tip sits over the hole."""
+        if seen.in_hole and want is not None:  # in, but the centre passed the hole centre
+            shift = min(want - seen.offset, -seen.offset - 2.0)
+        else:
+            shift = seen.hole_y - seen.tip_y  # centre the tip over the opening, where it drops in
+            if abs(shift) < 1.0:  # over the hole yet caught on a rim: probe either side, alternately
+                shift = 1.5 if tries % 2 == 0 else -1.5
         why = ("the fit goal does not match where the hole is (hole pose error, grasp angle or friction drag)"
                if skill == "fit" else f"the peg slipped out of the hole during {skill}")
         how = f"run fit again with its y goal moved {shift:+.1f} mm, then align (same shift) and insert"
