@@ -5,6 +5,8 @@ Imported as a plugin (`plugins=["tests.fake_tasks"]`) so spawned workers registe
 Variants:
 - "fair" / "biased": success with p = 0.5 / 0.8, drawn from default_rng(seed).
 - "raises": every trial with an even seed raises inside run().
+- "wrong-key": returns a record with another trial's key (a buggy task).
+- "slow": like "fair" but sleeps 50 ms (for kill-and-resume tests).
 - "crashes": the trial with seed 1 kills its worker with os._exit(1) (only in a
   child process; in the main process it raises instead, so a test never kills pytest).
 Methods: "baseline" has no recovery; "recover" reports extra executions and transitions.
@@ -14,14 +16,35 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import time
+from pathlib import Path
 
 import numpy as np
 
 from kintsugi.tasks import TASKS
 from kintsugi.trial import TrialRecord, TrialSpec
 
-P_SUCCESS = {"fair": 0.5, "biased": 0.8, "raises": 0.5, "crashes": 0.5}
+P_SUCCESS = {"fair": 0.5, "biased": 0.8, "raises": 0.5, "crashes": 0.5, "wrong-key": 0.5, "slow": 0.5}
 SKILLS = ("fit", "align", "insert")
+
+
+def _maybe_crash(spec: TrialSpec) -> None:
+    """Seed 1 kills its worker. With overrides["barrier_dir"], seeds 0 and 1 first wait for each
+    other (and seed 0 then lingers), so the crash certainly hits a pool with both trials running."""
+    barrier = spec.overrides.get("barrier_dir")
+    if barrier and spec.seed in (0, 1):
+        Path(barrier, f"seed{spec.seed}").touch()
+        other = Path(barrier, f"seed{1 - spec.seed}")
+        deadline = time.monotonic() + 10
+        while not other.exists() and time.monotonic() < deadline:
+            time.sleep(0.005)
+        if spec.seed == 0:
+            time.sleep(0.5)
+    if spec.seed != 1:
+        return
+    if multiprocessing.parent_process() is not None:
+        os._exit(1)
+    raise RuntimeError("would crash the worker (refusing to kill the main process)")
 
 
 class FakeCoinTask:
@@ -29,10 +52,10 @@ class FakeCoinTask:
         rng = np.random.default_rng(spec.seed)
         if spec.variant == "raises" and spec.seed % 2 == 0:
             raise RuntimeError(f"fake failure on seed {spec.seed}")
-        if spec.variant == "crashes" and spec.seed == 1:
-            if multiprocessing.parent_process() is not None:
-                os._exit(1)
-            raise RuntimeError("would crash the worker (refusing to kill the main process)")
+        if spec.variant == "crashes":
+            _maybe_crash(spec)
+        if spec.variant == "slow":
+            time.sleep(0.05)
         p = P_SUCCESS[spec.variant] + (0.1 if spec.condition == "easy" else 0.0)
         success = bool(rng.random() < p)
         extra: dict[str, int] = {}
@@ -45,7 +68,7 @@ class FakeCoinTask:
             success = success or bool(rng.random() < 0.5)
         calls = len(transitions) * 2
         return TrialRecord(
-            key=spec.key, task=spec.task, method=spec.method, variant=spec.variant,
+            key=spec.key if spec.variant != "wrong-key" else "bogus", task=spec.task, method=spec.method, variant=spec.variant,
             condition=spec.condition, seed=spec.seed,
             params={"p": p},
             success=success,

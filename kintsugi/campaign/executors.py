@@ -12,7 +12,9 @@
 
 from __future__ import annotations
 
+import importlib
 import multiprocessing
+import os
 from collections import deque
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -51,6 +53,16 @@ def run_in_worker(spec: TrialSpec, plugins: list[str]) -> TrialRecord:
     return run_trial(spec)
 
 
+def warm_up(plugins: list[str]) -> int:
+    """Start a worker and import the plugins in it (errors surface later, per trial)."""
+    for module in plugins:
+        try:
+            importlib.import_module(module)
+        except Exception:  # noqa: BLE001 - reported by the trial that needs it
+            pass
+    return os.getpid()
+
+
 _CRASH = (
     "worker process crashed while running this trial (segfault, os._exit or out of memory{how}): {{exc}}. "
     "Rerun this trial with the inline executor to see the crash."
@@ -79,7 +91,26 @@ class ProcessExecutor:
         self._ctx = multiprocessing.get_context("spawn")
 
     def _pool(self, workers: int) -> ProcessPoolExecutor:
-        return ProcessPoolExecutor(max_workers=workers, mp_context=self._ctx)
+        """A pool whose workers are all started before the first trial.
+
+        CPython's pool (3.11-3.13) spawns workers lazily and its manager thread
+        can miss the death of one spawned after it began waiting; the crash
+        then goes unnoticed until another result arrives (or forever, if none
+        does). Starting every worker up front with a warm-up task (which also
+        imports the plugins) closes that gap. A one-worker pool needs none: its
+        worker exists before the manager thread starts.
+        """
+        pool = ProcessPoolExecutor(max_workers=workers, mp_context=self._ctx)
+        if workers > 1:
+            warmups = [pool.submit(warm_up, self.plugins) for _ in range(workers)]
+            wait(warmups)
+            if any(isinstance(f.exception(), BrokenProcessPool) for f in warmups):
+                pool.shutdown(wait=False, cancel_futures=True)
+                raise KintsugiError(
+                    "worker processes die while starting (before any trial ran); "
+                    "run with the inline executor to see why"
+                )
+        return pool
 
     def run(self, specs: Iterable[TrialSpec]) -> Iterator[tuple[TrialSpec, TrialRecord]]:
         queue = deque(specs)
@@ -92,8 +123,16 @@ class ProcessExecutor:
         try:
             while queue or in_flight or isolated:
                 while queue and len(in_flight) < self.workers:
-                    spec = queue.popleft()
-                    in_flight[pool.submit(run_in_worker, spec, self.plugins)] = spec
+                    try:
+                        fut = pool.submit(run_in_worker, queue[0], self.plugins)
+                    except BrokenProcessPool:
+                        # Broke since the last wait; its in-flight futures fail and are handled below.
+                        if not in_flight:
+                            pool.shutdown(wait=False, cancel_futures=True)
+                            pool = self._pool(self.workers)
+                            continue
+                        break
+                    in_flight[fut] = queue.popleft()
                 done, _ = wait([*in_flight, *isolated], return_when=FIRST_COMPLETED)
                 suspects: list[TrialSpec] = []
                 for fut in done:
@@ -114,13 +153,13 @@ class ProcessExecutor:
                 suspects.extend(in_flight.values())
                 in_flight.clear()
                 pool.shutdown(wait=False, cancel_futures=True)
-                pool = self._pool(self.workers)
+                if len(suspects) > 1:
+                    for spec in suspects:
+                        solo = self._pool(1)
+                        isolated[solo.submit(run_in_worker, spec, self.plugins)] = (spec, solo)
+                pool = self._pool(self.workers)  # starts while the suspects rerun
                 if len(suspects) == 1:
                     yield suspects[0], failed_record(suspects[0], CRASH_ONLY.format(exc="BrokenProcessPool"))
-                    continue
-                for spec in suspects:
-                    solo = self._pool(1)
-                    isolated[solo.submit(run_in_worker, spec, self.plugins)] = (spec, solo)
         finally:
             pool.shutdown(wait=False, cancel_futures=True)
             for _, solo in isolated.values():
