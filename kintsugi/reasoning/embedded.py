@@ -33,6 +33,8 @@ from kintsugi.trial import ReasonerSettings
 RECOVERY_ORDER = ("fit", "align", "insert")
 PIVOT_MM = 140.0
 """Rough lever from the wrist to the peg tip: base shift that tilts a peg pivoting in the hole by 1 rad."""
+HOLE_MARGIN_MM = 1.5
+"""Slack when deciding whether the peg's cut outline lies inside the hole's opening (pixels are 0.6 mm)."""
 ALIGN_GAIN = 0.8
 """Fraction of the tilt correction to apply at once (the wrist absorbs part of any base motion)."""
 
@@ -75,12 +77,17 @@ def look(png: bytes | None, calib: CameraCalibration, cfg: PerceptionConfig) -> 
     mask = peg_mask(rgb, cfg) > 0
     v_surface = board_surface_v(rgb)
     in_hole = False
-    if v_surface is not None:
+    if v_surface is not None and 0 <= int(v_surface) - 2 < mask.shape[0]:
         rows = mask.sum(axis=1)
-        row = int(v_surface) - 2
         body = rows[rows > 0]
-        width = float(np.median(body)) if body.size else 0.0
-        in_hole = 0 <= row < len(rows) and width > 0 and rows[row] >= 0.5 * width
+        cut = np.flatnonzero(mask[int(v_surface) - 2])
+        if body.size and cut.size >= 0.5 * float(np.median(body)):
+            # The outline continues below the board line over its full width: the peg is in the hole only
+            # if that cut lies inside the opening (else it rests on the surface with a corner in the hole).
+            left = calib.to_plane(float(cut[0]), v_surface)[0]
+            right = calib.to_plane(float(cut[-1]) + 1.0, v_surface)[0]
+            margin = HOLE_MARGIN_MM
+            in_hole = left >= scene.hole.left_mm - margin and right <= scene.hole.right_mm + margin
     contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     box = cv2.boxPoints(cv2.minAreaRect(max(contours, key=cv2.contourArea)))
     bottom = box[np.argsort(box[:, 1])[-2:]].mean(axis=0)  # middle of the peg's bottom face
@@ -178,13 +185,13 @@ class EmbeddedReasoner:
 
     def _realign(self, req: AnalyzeRequest, skill: str, seen: Seen, state: str) -> AnalyzeReply:
         """Tip in the hole: rotate the peg upright and centre it by moving the align goal."""
-        tilt_shift = ALIGN_GAIN * PIVOT_MM * math.tan(math.radians(seen.tilt)) if abs(seen.tilt) > 1.0 else 0.0
-        centre_shift = -seen.offset if abs(seen.offset) > 1.0 else 0.0
-        shift = tilt_shift + centre_shift
-        if skill == "insert" and abs(shift) < 1.0:
-            shift = 1.5 if seen.tilt >= 0 else -1.5  # jammed although it looks aligned: nudge toward upright
-        why = ("the peg is still tilted in the hole" if abs(tilt_shift) >= abs(centre_shift)
-               else "the peg is upright but off the hole centre")
+        tilt_shift = ALIGN_GAIN * PIVOT_MM * math.tan(math.radians(seen.tilt))
+        # In the hole the peg can only pivot: its visible centre's offset follows from its tilt,
+        # so the tilt decides; only an upright peg is re-centred.
+        shift = tilt_shift if abs(seen.tilt) > 1.0 else -seen.offset
+        if abs(shift) < 1.0:
+            shift = 1.5 if seen.tilt >= 0 else -1.5  # looks aligned yet failed: nudge toward upright
+        why = "the peg is still tilted in the hole" if abs(seen.tilt) > 1.0 else "the peg is off the hole centre"
         if skill == "insert":
             why = f"insertion jammed: {why}"
         how = f"move the align goal {shift:+.1f} mm in y, then insert again"
