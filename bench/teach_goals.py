@@ -1,0 +1,162 @@
+"""How `kintsugi/tasks/peg/default_goals.json` was taught, and how much margin it has.
+
+    .venv/bin/python bench/teach_goals.py [--span 7.5] [--step 1.5] [--write]
+
+In the default condition only (peg aligned in the grasp, hole at its nominal place,
+nominal friction; never a randomized trial), run approach and contact with the stored
+goals, then sweep the fit goal (base y where the tilted tip drops into the hole) and the
+align goal (base y that lets the wrist swing the peg upright) on a grid around the stored
+values, finish with the stored insert, and score ground truth (tip >= 10 mm deep). The
+grid is run by branching MuJoCo states (mj_copyData), so each cell costs only its own
+align + insert. Prints, per cell, which shapes insert, and the taught goal's margin to the
+nearest failing cell. `--write` stores the most robust cell (largest distance to any
+failure, all shapes together) back into the file; without it the file is only read.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from concurrent.futures import ProcessPoolExecutor
+
+import kintsugi  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
+import mujoco
+import numpy as np
+
+from kintsugi.tasks.peg.config import PegTaskConfig
+from kintsugi.tasks.peg.goals import DEFAULT_GOALS_FILE, full_goals, load_goals
+from kintsugi.tasks.peg.skills import AXES, execute_skill
+from kintsugi.tasks.peg.world import HOME_POSE, PegWorld, TrialParams
+
+SHAPES = {"round": "r", "square": "s", "rectangle": "R", "polygon6": "6"}
+Y = AXES.index("y")
+
+
+def _snapshot(world: PegWorld) -> mujoco.MjData:
+    snap = mujoco.MjData(world.model)
+    mujoco.mj_copyData(snap, world.model, world.data)
+    return snap
+
+
+def _restore(world: PegWorld, snap: mujoco.MjData) -> None:
+    mujoco.mj_copyData(world.data, world.model, snap)
+
+
+def sweep_shape(shape: str, goals: dict[str, dict[str, float]], fits: list[float], aligns: list[float]
+                ) -> dict[tuple[float, float], float]:
+    """Tip depth (mm, negative = above the board) for every (fit y, align y) cell, in mm."""
+    world = PegWorld(PegTaskConfig(), TrialParams(shape=shape))  # the default condition
+    world.render = lambda: np.zeros((1, 1, 3), np.uint8)  # type: ignore[method-assign] - images unused
+    targets = full_goals(goals, HOME_POSE)
+    for skill in ("approach", "contact"):
+        execute_skill(world, skill, targets[skill])
+    after_contact = _snapshot(world)
+    depth: dict[tuple[float, float], float] = {}
+    for fy in fits:
+        _restore(world, after_contact)
+        fit = targets["fit"].copy()
+        fit[Y] = fy / 1000
+        execute_skill(world, "fit", fit)
+        after_fit = _snapshot(world)
+        for ay in aligns:
+            _restore(world, after_fit)
+            align = fit.copy()
+            align[Y] = ay / 1000
+            execute_skill(world, "align", align)
+            insert = align.copy()
+            insert[AXES.index("z")] = targets["insert"][AXES.index("z")]
+            execute_skill(world, "insert", insert)
+            truth = world.ground_truth()
+            depth[(fy, ay)] = truth.tip_depth_mm if truth.success else min(truth.tip_depth_mm, 0.0)
+    world.close()
+    return depth
+
+
+def _grid(centre: float, span: float, step: float) -> list[float]:
+    n = int(round(span / step))
+    return [round(centre + k * step, 3) for k in range(-n, n + 1)]
+
+
+def _margin(ok: dict[tuple[float, float], bool], at: tuple[float, float]) -> float:
+    """Distance (mm) from `at` to the nearest failing cell; inf if none fails in the grid."""
+    fails = [np.hypot(f - at[0], a - at[1]) for (f, a), good in ok.items() if not good]
+    return float(min(fails)) if fails else float("inf")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--span", type=float, default=7.5, help="sweep +- this many mm around each stored goal")
+    ap.add_argument("--step", type=float, default=1.5, help="grid step (mm)")
+    ap.add_argument("--jobs", type=int, default=2, help="worker processes (one shape each)")
+    ap.add_argument("--write", action="store_true", help="store the most robust cell in default_goals.json")
+    args = ap.parse_args()
+
+    goals = load_goals()
+    taught = (goals["fit"]["y"], goals["align"]["y"])
+    fits, aligns = _grid(taught[0], args.span, args.step), _grid(taught[1], args.span, args.step)
+    print(f"goals file: {DEFAULT_GOALS_FILE}")
+    print("stored goals (mm, deg): " + "; ".join(f"{s} {v}" for s, v in goals.items()))
+    print(f"sweep: fit y in [{fits[0]}, {fits[-1]}], align y in [{aligns[0]}, {aligns[-1]}], step {args.step} mm; "
+          f"condition none (aligned grasp, nominal hole and friction); shapes {', '.join(SHAPES)}\n")
+
+    t0 = time.perf_counter()
+    with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
+        futures = {s: pool.submit(sweep_shape, s, goals, fits, aligns) for s in SHAPES}
+        depth = {s: f.result() for s, f in futures.items()}
+    elapsed = time.perf_counter() - t0
+
+    ok = {s: {cell: d >= 10.0 for cell, d in depth[s].items()} for s in SHAPES}
+    every = {cell: all(ok[s][cell] for s in SHAPES) for cell in ok["round"]}
+    legend = ", ".join(f"{c} = {s}" for s, c in SHAPES.items())
+    print(f"Cells list the shapes that insert >= 10 mm ({legend}; '.' = none); [cell] = stored goal.\n")
+    print("| fit y \\ align y | " + " | ".join(f"{a:g}" for a in aligns) + " |")
+    print("|---|" + "---|" * len(aligns))
+    for fy in fits:
+        cells = []
+        for ay in aligns:
+            text = "".join(c for s, c in SHAPES.items() if ok[s][(fy, ay)]) or "."
+            cells.append(f"[{text}]" if (fy, ay) == taught else text)
+        print(f"| **{fy:g}** | " + " | ".join(cells) + " |")
+
+    print("\n| shape | stored goal inserts | depth at stored goal (mm) | cells inserting | "
+          "margin to nearest failing cell (mm) | fit-y interval at stored align | align-y interval at stored fit |")
+    print("|---|---|---|---|---|---|---|")
+    for s in SHAPES:
+        row = [fy for fy in fits if ok[s][(fy, taught[1])]]
+        col = [ay for ay in aligns if ok[s][(taught[0], ay)]]
+        print(f"| {s} | {'yes' if ok[s][taught] else 'NO'} | {depth[s][taught]:.3f} | "
+              f"{sum(ok[s].values())}/{len(ok[s])} | {_margin(ok[s], taught):.2f} | "
+              f"{_interval(row, taught[0], args.step)} | {_interval(col, taught[1], args.step)} |")
+    m_all = _margin(every, taught)
+    # Most robust cell: farthest from any failure, and from the grid's edge (beyond it is unknown).
+    edge = {c: min(c[0] - fits[0], fits[-1] - c[0], c[1] - aligns[0], aligns[-1] - c[1]) + args.step for c in every}
+    best = max(every, key=lambda c: (every[c], min(_margin(every, c), edge[c]),
+                                     -np.hypot(c[0] - taught[0], c[1] - taught[1])))
+    print(f"\nall shapes together: stored goal {'inserts' if every[taught] else 'FAILS'}, "
+          f"margin {m_all:.2f} mm to the nearest cell where some shape fails; "
+          f"most robust cell inside the grid fit y = {best[0]:g}, align y = {best[1]:g} "
+          f"(margin {min(_margin(every, best), edge[best]):.2f} mm, grid edge counted as a failure). "
+          f"Sweep took {elapsed:.1f} s.")
+
+    if args.write:
+        raw = json.loads(DEFAULT_GOALS_FILE.read_text())
+        raw["fit"]["y"], raw["align"]["y"] = best
+        DEFAULT_GOALS_FILE.write_text(json.dumps(raw, indent=2) + "\n")
+        print(f"wrote fit y = {best[0]:g}, align y = {best[1]:g} to {DEFAULT_GOALS_FILE}")
+
+
+def _interval(values: list[float], at: float, step: float) -> str:
+    """The contiguous run of succeeding grid values that contains `at` (or 'none')."""
+    if at not in values:
+        return "none"
+    lo = hi = at
+    while round(lo - step, 3) in values:
+        lo = round(lo - step, 3)
+    while round(hi + step, 3) in values:
+        hi = round(hi + step, 3)
+    return f"[{lo:g}, {hi:g}] (-{at - lo:g} / +{hi - at:g})"
+
+
+if __name__ == "__main__":
+    main()
