@@ -10,7 +10,7 @@ would apply looking at the picture. It never touches the simulator.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
@@ -35,6 +35,8 @@ PIVOT_MM = 140.0
 """Rough lever from the wrist to the peg tip: base shift that tilts a peg pivoting in the hole by 1 rad."""
 HOLE_MARGIN_MM = 1.5
 """Slack when deciding whether the peg's cut outline lies inside the hole's opening (pixels are 0.6 mm)."""
+FIT_RELEASED_N = 6.0
+"""A tip that sank into the hole relieves most of the contact press (about 11 N when taught)."""
 ALIGN_GAIN = 0.8
 """Fraction of the tilt correction to apply at once (the wrist absorbs part of any base motion)."""
 
@@ -121,6 +123,11 @@ class EmbeddedReasoner:
         if out.skill == "fit":
             vision = checks.get("vision_fit")
             table = vision.message if vision else "no vision check"
+            pressed = out.wrist_force_z_n > FIT_RELEASED_N
+            if seen.in_hole and pressed:
+                return JudgeReply(success=False, explanation=(
+                    f"Fit failed: the peg's outline dips below the board line, but the wrist still presses with "
+                    f"{out.wrist_force_z_n:.1f} N, so the tip has not sunk into the hole ({where})."))
             if seen.in_hole:  # the formation's purpose; align corrects any residual offset or tilt
                 note = "" if vision and vision.passed else f" (Table I says '{table}'; align will correct it)"
                 return JudgeReply(success=True, explanation=(
@@ -156,6 +163,8 @@ class EmbeddedReasoner:
         seen = look(req.outcome.image_png, req.calibration, self.cfg)
         goal = look(req.goal_image_png, req.calibration, self.cfg)
         skill = req.outcome.skill
+        if skill == "fit" and req.outcome.wrist_force_z_n > FIT_RELEASED_N:
+            seen = replace(seen, in_hole=False)  # still pressed: the tip has not sunk in (see judge)
         want = goal.offset if (goal.peg and goal.hole) else 0.0  # taught peg-to-hole offset for this skill
         if not (seen.peg and seen.hole):
             return self._reply(skill, "the camera could not see the peg and the hole", "unknown",

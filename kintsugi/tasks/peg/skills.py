@@ -17,6 +17,7 @@ import numpy as np
 from kintsugi.tasks.peg.world import PegWorld
 
 AXES = ("y", "z", "roll")
+HALT_SLACK = 0.0005  # m of extra compression tolerated when a skill starts already past the limit
 
 
 @dataclass(frozen=True)
@@ -83,6 +84,9 @@ def execute_skill(
     reached = halted = False
     settle_left = ctl.settle_s
     max_comp = 0.0
+    # Starting beyond the limit (after a halt), a skill may still move as long as it does not
+    # compress the wrist further; otherwise no recovery could ever relieve a halted wrist.
+    halt_at = max(limit, world.wrist_compression() + HALT_SLACK)
     while True:
         elapsed = world.data.time - t0
         if elapsed >= ctl.timeout_s:
@@ -96,7 +100,7 @@ def execute_skill(
         max_comp = max(max_comp, comp)
         if on_tick is not None:
             on_tick(world)
-        if comp > limit:
+        if comp > halt_at:
             halted = True
             break
         if reached:
