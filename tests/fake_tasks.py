@@ -38,8 +38,10 @@ def _maybe_crash(spec: TrialSpec) -> None:
         deadline = time.monotonic() + 10
         while not other.exists() and time.monotonic() < deadline:
             time.sleep(0.005)
-        if spec.seed == 0:
-            time.sleep(0.5)
+        lingered = Path(barrier, "seed0-lingered")
+        if spec.seed == 0 and not lingered.exists():  # only the first time, not when rerun alone
+            lingered.touch()
+            time.sleep(0.3)
     if spec.seed != 1:
         return
     if multiprocessing.parent_process() is not None:

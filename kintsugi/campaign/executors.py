@@ -15,6 +15,7 @@ from __future__ import annotations
 import importlib
 import multiprocessing
 import os
+import signal
 from collections import deque
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -51,6 +52,24 @@ def run_in_worker(spec: TrialSpec, plugins: list[str]) -> TrialRecord:
     except KintsugiError as exc:
         return failed_record(spec, f"KintsugiError: {exc}")
     return run_trial(spec)
+
+
+def _ignore_sigint() -> None:
+    """Ctrl-C is the main process's to handle (it stops the pool); a worker must not turn it
+    into a recorded 'KeyboardInterrupt' failure of the trial it was running."""
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _kill(pool: ProcessPoolExecutor) -> None:
+    """Stop a pool now, running trials included (Python 3.14 has kill_workers; older ones do not)."""
+    pool.shutdown(wait=False, cancel_futures=True)
+    kill = getattr(pool, "kill_workers", None)
+    if kill is not None:
+        kill()
+        return
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        if proc.is_alive():
+            proc.kill()
 
 
 def warm_up(plugins: list[str]) -> int:
@@ -100,7 +119,7 @@ class ProcessExecutor:
         imports the plugins) closes that gap. A one-worker pool needs none: its
         worker exists before the manager thread starts.
         """
-        pool = ProcessPoolExecutor(max_workers=workers, mp_context=self._ctx)
+        pool = ProcessPoolExecutor(max_workers=workers, mp_context=self._ctx, initializer=_ignore_sigint)
         if workers > 1:
             warmups = [pool.submit(warm_up, self.plugins) for _ in range(workers)]
             wait(warmups)
@@ -114,7 +133,12 @@ class ProcessExecutor:
 
     def run(self, specs: Iterable[TrialSpec]) -> Iterator[tuple[TrialSpec, TrialRecord]]:
         queue = deque(specs)
-        pool = self._pool(self.workers)
+        if not queue:
+            return
+        # Never more workers than trials left: a resumed campaign with 1 trial to go
+        # (or the tail after a crash) does not start a full pool.
+        size = min(self.workers, len(queue))
+        pool = self._pool(size)
         # Only `workers` trials are submitted at a time, so when the pool breaks we
         # know exactly which trials were in it (queued ones were never started).
         in_flight: dict[Future, TrialSpec] = {}
@@ -122,14 +146,15 @@ class ProcessExecutor:
         isolated: dict[Future, tuple[TrialSpec, ProcessPoolExecutor]] = {}
         try:
             while queue or in_flight or isolated:
-                while queue and len(in_flight) < self.workers:
+                while queue and len(in_flight) < size:
                     try:
                         fut = pool.submit(run_in_worker, queue[0], self.plugins)
                     except BrokenProcessPool:
                         # Broke since the last wait; its in-flight futures fail and are handled below.
                         if not in_flight:
                             pool.shutdown(wait=False, cancel_futures=True)
-                            pool = self._pool(self.workers)
+                            size = min(self.workers, len(queue))
+                            pool = self._pool(size)
                             continue
                         break
                     in_flight[fut] = queue.popleft()
@@ -157,13 +182,17 @@ class ProcessExecutor:
                     for spec in suspects:
                         solo = self._pool(1)
                         isolated[solo.submit(run_in_worker, spec, self.plugins)] = (spec, solo)
-                pool = self._pool(self.workers)  # starts while the suspects rerun
+                size = max(1, min(self.workers, len(queue)))
+                pool = self._pool(size)  # starts while the suspects rerun
                 if len(suspects) == 1:
                     yield suspects[0], failed_record(suspects[0], CRASH_ONLY.format(exc="BrokenProcessPool"))
-        finally:
-            pool.shutdown(wait=False, cancel_futures=True)
-            for _, solo in isolated.values():
-                solo.shutdown(wait=False, cancel_futures=True)
+        except BaseException:
+            # Interrupted (Ctrl-C, generator closed, store error): do not wait for trials
+            # that may run for minutes; unrecorded ones simply rerun on resume.
+            for p in [pool, *(solo for _, solo in isolated.values())]:
+                _kill(p)
+            raise
+        pool.shutdown(wait=True)
 
     @staticmethod
     def _outcome(fut: Future, spec: TrialSpec, crashed: str) -> TrialRecord:
