@@ -50,6 +50,11 @@ def test_table_ii_numbers():
     assert rows[("vlm", "friction")][4:] == ["0.0", "0.0", "0.0", "100 [89–100]", "100 [89–100]", "0"]
 
 
+def test_table_ii_explicit_recovering_methods():
+    t = table_ii(records(), CFG, recovering={"none", "vlm"})
+    assert t.rows[0][4:7] == ["0.0", "0.0", "0.0"]
+
+
 def test_table_iii_row_percentages():
     tables = table_iii(records(), CFG)
     assert len(tables) == 1 and "vlm / round" in tables[0].title

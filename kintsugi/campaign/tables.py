@@ -54,13 +54,22 @@ def _ordered_skills(seen: Iterable[str]) -> list[str]:
 
 
 def _recovering_methods(records: Sequence[TrialRecord]) -> set[str]:
-    return {r.method for r in records if any(v > 0 for v in r.extra_executions.values())}
+    """Methods that showed recovery in any trial: an extra execution or a recovery transition."""
+    return {r.method for r in records if r.transitions or any(v > 0 for v in r.extra_executions.values())}
 
 
-def table_ii(records: Sequence[TrialRecord], cfg: CampaignConfig | None = None) -> TextTable:
-    """Success F/G with Wilson 95% intervals and mean extra executions per contact formation."""
+def table_ii(
+    records: Sequence[TrialRecord],
+    cfg: CampaignConfig | None = None,
+    recovering: set[str] | None = None,
+) -> TextTable:
+    """Success F/G with Wilson 95% intervals and mean extra executions per contact formation.
+
+    `recovering` names the methods that have recovery (their extra executions show
+    numbers even when all zero); by default it is inferred from the records.
+    """
     skills = _ordered_skills(k.lower() for r in records for k in r.extra_executions)
-    recovering = _recovering_methods(records)
+    recovering = _recovering_methods(records) if recovering is None else recovering
     table = TextTable(
         title="Table II — success and extra executions per cell",
         columns=["Method", "Variant", "Condition", "n", *[s.capitalize() for s in skills],
