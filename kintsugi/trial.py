@@ -98,10 +98,11 @@ class TrialRecord(StrictModel):
 
 def run_trial(spec: TrialSpec) -> TrialRecord:
     """Run one trial; any exception becomes a recorded failed trial, never a lost one."""
-    from kintsugi.tasks import TASKS
+    from kintsugi.tasks import TASKS, load_all
 
     start = time.perf_counter()
     try:
+        load_all()
         task = TASKS.get(spec.task).factory()
         record = task.run(spec)
     except Exception as exc:  # noqa: BLE001 - a campaign must survive any trial failure

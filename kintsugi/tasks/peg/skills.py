@@ -119,11 +119,16 @@ def execute_skill(
 
 
 def _step_toward(pose: np.ndarray, goal: np.ndarray, v_lin: float, v_rot: float) -> np.ndarray:
-    """One bounded-speed step along the straight line to the goal (exact arrival)."""
-    out = pose.copy()
-    d = goal[:2] - pose[:2]
-    dist = float(np.hypot(*d))
-    out[:2] = goal[:2] if dist <= v_lin else pose[:2] + d * (v_lin / dist)
-    dr = goal[2] - pose[2]
-    out[2] = goal[2] if abs(dr) <= v_rot else pose[2] + math.copysign(v_rot, dr)
-    return out
+    """One bounded-speed step along the straight line to the goal (exact arrival).
+
+    Plain float math: this runs every control tick and numpy on 3-vectors costs more than the physics.
+    """
+    y, z, r = float(pose[0]), float(pose[1]), float(pose[2])
+    gy, gz, gr = float(goal[0]), float(goal[1]), float(goal[2])
+    dist = math.hypot(gy - y, gz - z)
+    if dist <= v_lin:
+        y, z = gy, gz
+    else:
+        y, z = y + (gy - y) * v_lin / dist, z + (gz - z) * v_lin / dist
+    r = gr if abs(gr - r) <= v_rot else r + math.copysign(v_rot, gr - r)
+    return np.array((y, z, r))

@@ -29,6 +29,7 @@ _FATAL_WARNINGS = (
     mujoco.mjtWarning.mjWARN_CONTACTFULL,
     mujoco.mjtWarning.mjWARN_CNSTRFULL,
 )
+_FATAL_INDEX = np.array([int(w) for w in _FATAL_WARNINGS])
 
 
 class TrialParams(StrictModel):
@@ -104,13 +105,14 @@ class PegWorld:
         self.check_health()
 
     def check_health(self) -> None:
-        for w in _FATAL_WARNINGS:
-            if self.data.warning[w].number > 0:
-                raise SimulationDiverged(
-                    f"MuJoCo warning {w.name} at t={self.data.time:.3f}s; lower sim.timestep_s "
-                    "or raise sim.contact_timeconst_s"
-                )
-        if not np.all(np.isfinite(self.data.qpos)):
+        counts = self.data.warning.number[_FATAL_INDEX]
+        if counts.any():
+            w = _FATAL_WARNINGS[int(np.flatnonzero(counts)[0])]
+            raise SimulationDiverged(
+                f"MuJoCo warning {w.name} at t={self.data.time:.3f}s; lower sim.timestep_s "
+                "or raise sim.contact_timeconst_s"
+            )
+        if not np.isfinite(self.data.qpos).all():
             raise SimulationDiverged(f"non-finite state at t={self.data.time:.3f}s")
 
     # --- robot-side sensing ---------------------------------------------
