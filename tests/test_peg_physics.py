@@ -162,14 +162,14 @@ def test_hole_opening_is_peg_plus_half_clearance(shape: str) -> None:
     peg = peg_shape(shape, CFG)
     hole = hole_for(peg, CFG)
     c = CFG.peg.clearance_mm / 2 * MM
-    assert hole.half_y == pytest.approx(peg.half_y + c, abs=1e-9)
+    assert hole.y_range[1] == pytest.approx(peg.half_y + c, abs=1e-9)
     # Measured in the compiled world: rays from the hole axis, 20 mm down, hit the walls
     # at the half opening along +-y (and +-x: the peg's depth half extent + clearance/2).
     world = _world(shape)
     mujoco.mj_forward(world.model, world.data)
     origin = (0.0, 0.0, -0.02)
-    for direction in ((0, 1, 0), (0, -1, 0)):
-        assert _ray_distance(world, origin, direction) == pytest.approx(hole.half_y, abs=1e-6)
+    for direction, edge in (((0, 1, 0), hole.y_range[1]), ((0, -1, 0), -hole.y_range[0])):
+        assert _ray_distance(world, origin, direction) == pytest.approx(edge, abs=1e-6)
     half_x = peg.half_x if peg.kind != "prism" else peg.circumradius * math.cos(math.pi / peg.sides)
     # Polygon holes: x is a vertex direction unless a side faces it; measure along the side normals.
     for angle, inset in hole.sides:
@@ -233,7 +233,7 @@ def test_ground_truth_needs_the_tip_inside_the_opening() -> None:
     world = _world("round")
     hole = world.hole
     mocap = world.model.body_mocapid[_body(world, "base")]
-    for y, z, inside in ((0.0, -0.02, True), (hole.half_y * 0.9, -0.02, True), (hole.half_y + 0.002, -0.02, False),
+    for y, z, inside in ((0.0, -0.02, True), (hole.y_range[1] * 0.9, -0.02, True), (hole.y_range[1] + 0.002, -0.02, False),
                          (0.0, 0.005, False)):
         world.data.mocap_pos[mocap] = (0.0, y, z + GRASP_TO_TIP)
         world.data.qpos[:] = 0.0

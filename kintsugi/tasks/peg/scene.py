@@ -47,11 +47,13 @@ def _board_geoms(hole: HoleShape, cfg: PegTaskConfig) -> list[str]:
                      f'pos="{_f(sgn * (PLATE_HALF_CUT + xw), 0, cz)}" {common}/>')
     # Hole walls: one box per half-plane, inner face on the hole's side.
     n = len(hole.sides)
+    front = BOARD_HALF_X  # the rim must be painted in front of every wall box
     for k, (angle, inset) in enumerate(hole.sides):
         ny, nx = math.cos(angle), math.sin(angle)
         d = inset + WALL_THICK / 2
         # Long enough to close the ring between neighbours, short enough to stay inside the board.
         half_len = min(WALL_HALF_LEN, (inset + WALL_THICK) * math.tan(math.pi / n) + 0.005)
+        front = max(front, nx * d + half_len * abs(ny) + WALL_THICK / 2 * abs(nx))
         geoms.append(
             f'<geom name="wall{k}" type="box" size="{_f(half_len, WALL_THICK / 2, hz)}" '
             f'pos="{_f(nx * d, ny * d, cz)}" euler="0 0 {-angle:.6g}" {common}/>'
@@ -60,9 +62,10 @@ def _board_geoms(hole: HoleShape, cfg: PegTaskConfig) -> list[str]:
     geoms.append(f'<geom name="floor" type="box" size="{_f(BOARD_HALF_X, BOARD_HALF_Y, floor_t / 2)}" '
                  f'pos="{_f(0, 0, -depth - floor_t / 2)}" {common}/>')
     # Red rim: the hole's section painted on the board's front face (visual only).
+    y0, y1 = hole.y_range
     geoms.append(
-        f'<geom name="hole_rim" type="box" size="{_f(0.0005, hole.half_y, hz)}" '
-        f'pos="{_f(BOARD_HALF_X + 0.001, 0, cz)}" rgba="{HOLE_RGBA}" contype="0" conaffinity="0" group="1"/>'
+        f'<geom name="hole_rim" type="box" size="{_f(0.0005, (y1 - y0) / 2, hz)}" '
+        f'pos="{_f(front + 0.001, (y0 + y1) / 2, cz)}" rgba="{HOLE_RGBA}" contype="0" conaffinity="0" group="1"/>'
     )
     return geoms
 

@@ -41,7 +41,23 @@ class HoleShape:
     """Half-planes (normal angle in the x-y plane from +y, distance from the axis)."""
 
     sides: tuple[tuple[float, float], ...]
-    half_y: float  # half opening along y (for scoring and the red rim patch)
+
+    def vertices(self) -> list[tuple[float, float]]:
+        """(x, y) corners of the opening: where neighbouring walls' inner faces meet."""
+        sides = sorted(self.sides)
+        out = []
+        for (a1, d1), (a2, d2) in zip(sides, sides[1:] + sides[:1]):
+            # Solve sin(a) x + cos(a) y = d for both walls.
+            det = math.sin(a1) * math.cos(a2) - math.cos(a1) * math.sin(a2)
+            out.append(((d1 * math.cos(a2) - d2 * math.cos(a1)) / det,
+                        (math.sin(a1) * d2 - math.sin(a2) * d1) / det))
+        return out
+
+    @property
+    def y_range(self) -> tuple[float, float]:
+        """The opening's extent along y (odd polygons are not symmetric about the axis)."""
+        ys = [y for _, y in self.vertices()]
+        return min(ys), max(ys)
 
 
 SHAPES_HELP = "round, square, rectangle, or polygonN (regular N-sided prism, N >= 3)"
@@ -71,14 +87,11 @@ def hole_for(peg: PegShape, cfg: PegTaskConfig) -> HoleShape:
     c = cfg.peg.clearance_mm / 2 * MM
     if peg.kind == "cylinder":
         n = cfg.hole.round_sides
-        sides = tuple((2 * math.pi * k / n, peg.half_y + c) for k in range(n))
-        return HoleShape(sides, peg.half_y + c)
+        return HoleShape(tuple((2 * math.pi * k / n, peg.half_y + c) for k in range(n)))
     if peg.kind == "box":
-        sides = ((0.0, peg.half_y + c), (math.pi, peg.half_y + c),
-                 (math.pi / 2, peg.half_x + c), (3 * math.pi / 2, peg.half_x + c))
-        return HoleShape(sides, peg.half_y + c)
+        return HoleShape(((0.0, peg.half_y + c), (math.pi, peg.half_y + c),
+                          (math.pi / 2, peg.half_x + c), (3 * math.pi / 2, peg.half_x + c)))
     n = peg.sides
     inradius = peg.circumradius * math.cos(math.pi / n) + c
     # Side normals of the prism: angles (from +y) at 2*pi*(k+1/2)/n + pi/n offset -> flat side faces +y.
-    sides = tuple((2 * math.pi * k / n, inradius) for k in range(n))
-    return HoleShape(sides, inradius if n % 2 == 0 else peg.circumradius + c)
+    return HoleShape(tuple((2 * math.pi * k / n, inradius) for k in range(n)))

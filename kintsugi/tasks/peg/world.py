@@ -159,7 +159,8 @@ class PegWorld:
     def ground_truth(self) -> GroundTruth:
         tip = self.data.site_xpos[self._tip]
         offset = tip[1] - self.params.hole_y_mm * MM
-        inside = abs(offset) <= self.hole.half_y and tip[2] < 0
+        y0, y1 = self.hole.y_range
+        inside = y0 <= offset <= y1 and tip[2] < 0
         depth = -tip[2]
         return GroundTruth(tip_depth_mm=depth / MM, tip_offset_mm=offset / MM, inside_hole=bool(inside),
                            success=bool(inside and depth >= SUCCESS_DEPTH))
