@@ -42,12 +42,12 @@ def test_table_ii_numbers():
     rows = {(r[0], r[2]): r for r in t.rows}
     assert [(r[0], r[2]) for r in t.rows] == [("none", "all"), ("vlm", "all"), ("vlm", "friction")]
     none_all = rows[("none", "all")]
-    assert none_all[3:] == ["30", "—", "—", "—", "50 [33–67]", "47 [30–64]", "0"]
+    assert none_all[3:] == ["30", "—", "—", "—", "50 [33–67]", "47 [30–64]", "1", "0", "0"]  # seed 14: F+G-
     vlm_all = rows[("vlm", "all")]
     # 29 trials without error: fit 1.0; align 2 on odd seeds 1..27 -> 14*2/29 = 0.97
     assert vlm_all[4:7] == ["1.0", "1.0", "0.0"]
-    assert vlm_all[7:] == ["83 [66–93]", "83 [66–93]", "1"]
-    assert rows[("vlm", "friction")][4:] == ["0.0", "0.0", "0.0", "100 [89–100]", "100 [89–100]", "0"]
+    assert vlm_all[7:] == ["83 [66–93]", "83 [66–93]", "0", "0", "1"]
+    assert rows[("vlm", "friction")][4:] == ["0.0", "0.0", "0.0", "100 [89–100]", "100 [89–100]", "0", "0", "0"]
 
 
 def test_table_ii_explicit_recovering_methods():
@@ -75,7 +75,7 @@ def test_timing_table():
 def test_renderings_contain_the_numbers():
     t = table_ii(records(), CFG)
     md = to_markdown(t)
-    assert "| vlm | round | all | 30 | 1.0 | 1.0 | 0.0 | 83 [66–93] | 83 [66–93] | 1 |" in md
+    assert "| vlm | round | all | 30 | 1.0 | 1.0 | 0.0 | 83 [66–93] | 83 [66–93] | 0 | 0 | 1 |" in md
     assert "<td class=\"r\">83 [66–93]</td>" in to_html(t)
     buf = StringIO()
     print_tables([t, *table_iii(records(), CFG)], Console(file=buf, width=60))

@@ -73,11 +73,12 @@ def table_ii(
     table = TextTable(
         title="Table II — success and extra executions per cell",
         columns=["Method", "Variant", "Condition", "n", *[s.capitalize() for s in skills],
-                 "F % [95% CI]", "G % [95% CI]", "Err"],
+                 "F % [95% CI]", "G % [95% CI]", "F+G-", "F-G+", "Err"],
         notes=[
             "Fit/Align/Insert: mean extra executions per trial caused by recovery (trials without error); "
             "— for methods that never recovered.",
             "F: success by the method's own verdict, G: ground-truth success, as % [Wilson 95% interval]. "
+            "F+G-: false successes (the method claimed success, the peg was not in); F-G+: missed successes. "
             "Err: trials that raised or crashed; they count as failures.",
         ],
     )
@@ -90,8 +91,10 @@ def table_ii(
         ]
         f = sum(r.framework_success and r.error is None for r in rs)
         g = sum(r.success and r.error is None for r in rs)
+        false_ok = sum(r.framework_success and not r.success for r in ok)
+        missed = sum(r.success and not r.framework_success for r in ok)
         table.rows.append([method, variant, condition, str(n), *extra,
-                           format_rate(f, n), format_rate(g, n), str(n - len(ok))])
+                           format_rate(f, n), format_rate(g, n), str(false_ok), str(missed), str(n - len(ok))])
     return table
 
 
