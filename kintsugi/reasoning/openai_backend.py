@@ -77,8 +77,8 @@ def resolve_api_key(api_key_env: str, base_url: str | None) -> str:
         return key
     if _is_openai(base_url):
         raise ConfigError(
-            f"the openai reasoner needs an API key: export {api_key_env}=<your key>, or point "
-            f"reasoner.base_url at a local OpenAI-compatible server (vLLM, Ollama, llama.cpp)"
+            f"the openai reasoner needs an API key: export {api_key_env}=<your key>, or point --base-url "
+            f"(reasoner.base_url) at a local OpenAI-compatible server (vLLM, Ollama, llama.cpp)"
         )
     return PLACEHOLDER_KEY
 
