@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from kintsugi.methods import METHODS
-from kintsugi.methods.logging import log_skill
+from kintsugi.methods.skill_log import log_skill
 from kintsugi.tasks.peg.context import PegContext
 from kintsugi.tasks.peg.robot import PegRobot
 from kintsugi.tasks.peg.skills import SEQUENCE

@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from kintsugi.methods import METHODS
-from kintsugi.methods.logging import log_skill
+from kintsugi.methods.skill_log import log_skill
 from kintsugi.perception.checks import align_check, compression_check, fit_check, pose_check
 from kintsugi.perception.compare import compare_to_goal
 from kintsugi.perception.segment import measure
@@ -23,6 +23,8 @@ from kintsugi.reasoning.types import (
     AnalyzeRequest,
     Attempt,
     CheckResult,
+    CameraCalibration,
+    JudgeReply,
     JudgeRequest,
     PlanRequest,
     Pose,
@@ -63,6 +65,7 @@ class Recovery:
         self.goal_png = {s: to_png(img) for s, img in self.goal_images.items()}
         rec = self.cfg.recovery
         self.workspace = {"y": rec.workspace_y_mm, "z": rec.workspace_z_mm}
+        self.calibration: CameraCalibration | None = None  # set from the robot when the trial starts
 
     def _full_goal(self, skill: str) -> np.ndarray:
         """Full [y, z, roll] goal: '—' axes take the goals of the preceding contact formations."""
@@ -76,6 +79,7 @@ class Recovery:
         return {s: to_pose(self._full_goal(s)) for s in RECOVERABLE}
 
     def run(self, robot: PegRobot, log: TrialLog) -> bool:
+        self.calibration = robot.calibration
         try:
             return self._run(robot, log)
         finally:
@@ -103,7 +107,7 @@ class Recovery:
                 goal_image_png=self.goal_png[skill], calibration=robot.calibration))
             log_skill(log, result, robot.sim_time, recovery=recovering, verdict=verdict.success,
                       message=verdict.explanation)
-            log.say(f"         checks: " + "; ".join(f"{c.name}={'ok' if c.passed else c.message}" for c in checks))
+            log.say("         checks: " + "; ".join(f"{c.name}={'ok' if c.passed else c.message}" for c in checks))
             log.say(f"         verdict: {'SUCCESS' if verdict.success else 'FAILURE'} - {verdict.explanation}")
             log.status(f"CF{SKILLS[skill].cf} {skill}", f"{'SUCCESS' if verdict.success else 'FAILURE'}")
             history.append(Attempt(skill=skill, goal=outcome.goal, terminal=outcome.terminal,
@@ -134,18 +138,15 @@ class Recovery:
         checks = [pose_check(outcome.goal, outcome.terminal, SKILLS[skill].axes, self.cfg.control.pose_tol_mm),
                   compression_check(r.compression_limit, outcome.wrist_force_z_n)]
         if skill == "fit":
-            checks.append(fit_check(measure(r.image, self._calib(), pcfg)))
+            checks.append(fit_check(measure(r.image, self.calibration, pcfg)))
         elif skill == "align":
-            checks.append(align_check(measure(r.image, self._calib(), pcfg), pcfg))
+            checks.append(align_check(measure(r.image, self.calibration, pcfg), pcfg))
         else:
-            checks.append(compare_to_goal(r.image, self.goal_images["insert"], self._calib(), pcfg))
+            checks.append(compare_to_goal(r.image, self.goal_images["insert"], self.calibration, pcfg))
         return checks
 
-    def _calib(self):  # noqa: ANN202 - CameraCalibration
-        return self._calibration
-
     def _recover(self, robot: PegRobot, log: TrialLog, outcome: SkillOutcome, checks: list[CheckResult],
-                 verdict, history: list[Attempt]) -> list[str]:  # noqa: ANN001 - JudgeReply
+                 verdict: JudgeReply, history: list[Attempt]) -> list[str]:
         rec = self.cfg.recovery
         skills = {s: list(SKILLS[s].axes) for s in RECOVERABLE}
         analysis = self.reasoner.analyze(AnalyzeRequest(
@@ -167,17 +168,8 @@ class Recovery:
             f"{s.skill}({', '.join(f'{a}={v:.1f}' for a, v in s.goal.items())})" for s in plan.steps))
         return queue
 
-    def bind(self, robot: PegRobot) -> None:
-        self._calibration = robot.calibration
-
-
-class _BoundRecovery(Recovery):
-    def run(self, robot: PegRobot, log: TrialLog) -> bool:
-        self.bind(robot)
-        return super().run(robot, log)
-
 
 @METHODS.register("recovery", "checks every skill and recovers failures with a reasoner (the paper's method)",
                   tags=("peg-insertion", "reasoner"))
 def make_recovery(ctx: PegContext) -> Recovery:
-    return _BoundRecovery(ctx)
+    return Recovery(ctx)
