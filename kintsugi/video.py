@@ -37,7 +37,7 @@ class VideoRecorder:
             cv2.putText(frame, text[:70], (6, y), cv2.FONT_HERSHEY_SIMPLEX, 0.5, (0, 0, 0), 3, cv2.LINE_AA)
             colour = (255, 255, 255)
             if i == 1:
-                colour = (120, 255, 120) if text.startswith("SUCCESS") else (255, 140, 140)
+                colour = (120, 255, 120) if "SUCCESS" in text else (255, 140, 140)
             cv2.putText(frame, text[:70], (6, y), cv2.FONT_HERSHEY_SIMPLEX, 0.5, colour, 1, cv2.LINE_AA)
         self.frames.append(frame)
 
