@@ -109,7 +109,8 @@ class Recovery:
                       message=verdict.explanation)
             log.say("         checks: " + "; ".join(f"{c.name}={'ok' if c.passed else c.message}" for c in checks))
             log.say(f"         verdict: {'SUCCESS' if verdict.success else 'FAILURE'} - {verdict.explanation}")
-            log.status(f"CF{SKILLS[skill].cf} {skill}", f"last verdict: {skill} {'SUCCESS' if verdict.success else 'FAILURE'}")
+            word = "SUCCESS" if verdict.success else "FAILURE"
+            log.status(f"CF{SKILLS[skill].cf} {skill}", f"last verdict: {skill} {word}")
             history.append(Attempt(skill=skill, goal=outcome.goal, terminal=outcome.terminal,
                                    success=verdict.success, explanation=verdict.explanation))
             if verdict.success:
