@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import json
 from pathlib import Path
 from typing import Annotated, Optional
 
@@ -134,6 +133,7 @@ def bench(
 @app.command()
 def report(out: Annotated[Path, typer.Argument(help="campaign directory")]) -> None:
     """Rebuild the tables and report of a campaign directory from its results."""
+    from kintsugi.campaign.plan import expand
     from kintsugi.campaign.render import print_tables
     from kintsugi.campaign.report import write_report
     from kintsugi.campaign.store import ResultStore
@@ -142,8 +142,10 @@ def report(out: Annotated[Path, typer.Argument(help="campaign directory")]) -> N
     try:
         store = ResultStore(out)
         cfg = store.load_config()
-        md, html = write_report(out, cfg)
-        print_tables(all_tables([r for r in store.read()], cfg), console)
+        wanted = {s.key for s in expand(cfg)}
+        records = [r for r in store.read() if r.key in wanted]  # read once, only this campaign's trials
+        md, html = write_report(out, cfg, records)
+        print_tables(all_tables(records, cfg), console)
     except KintsugiError as exc:
         _fail(exc)
         return

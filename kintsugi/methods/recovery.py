@@ -32,9 +32,9 @@ from kintsugi.reasoning.types import (
 )
 from kintsugi.reasoning.validation import validate_plan
 from kintsugi.tasks.peg.context import PegContext
-from kintsugi.tasks.peg.goals import to_si
+from kintsugi.tasks.peg.goals import full_goals
 from kintsugi.tasks.peg.robot import PegRobot, to_pose
-from kintsugi.tasks.peg.skills import AXES, SEQUENCE, SKILLS, SkillResult
+from kintsugi.tasks.peg.skills import SKILLS, SkillResult
 from kintsugi.tasks.peg.world import HOME_POSE
 from kintsugi.trial import TrialLog
 
@@ -69,11 +69,7 @@ class Recovery:
 
     def _full_goal(self, skill: str) -> np.ndarray:
         """Full [y, z, roll] goal: '—' axes take the goals of the preceding contact formations."""
-        g = HOME_POSE.copy()
-        for s in SEQUENCE[: SEQUENCE.index(skill) + 1]:
-            for axis, v in to_si(self.goals[s]).items():
-                g[AXES.index(axis)] = v
-        return g
+        return full_goals(self.goals, HOME_POSE)[skill]
 
     def _pose_goals(self) -> dict[str, Pose]:
         return {s: to_pose(self._full_goal(s)) for s in RECOVERABLE}

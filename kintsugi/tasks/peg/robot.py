@@ -50,6 +50,3 @@ def to_pose(v: np.ndarray) -> Pose:
     """SI [y, z, roll] -> reasoner units (mm, mm, deg)."""
     return Pose(y=round(float(v[0]) * 1000, 3), z=round(float(v[1]) * 1000, 3), roll=round(float(np.degrees(v[2])), 3))
 
-
-def from_pose(p: Pose) -> np.ndarray:
-    return np.array([p.y / 1000, p.z / 1000, np.radians(p.roll)])

@@ -55,15 +55,6 @@ class SkillResult:
     sim_time: float = 0.0
 
 
-def merge_goal(previous: np.ndarray, skill: str, values: dict[str, float]) -> np.ndarray:
-    """A full goal from the previous one and the skill's own axes (others keep their value)."""
-    goal = previous.copy()
-    for axis in SKILLS[skill].axes:
-        if axis in values:
-            goal[AXES.index(axis)] = values[axis]
-    return goal
-
-
 def execute_skill(
     world: PegWorld,
     skill: str,
