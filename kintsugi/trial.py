@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import time
 import traceback
-from typing import Any
+from typing import Any, Literal
 
 from pydantic import Field
 
@@ -24,6 +24,9 @@ class ReasonerSettings(StrictModel):
     api_key_env: str = "OPENAI_API_KEY"
     timeout_s: float = 60.0
     max_retries: int = 3
+    structured_output: Literal["auto", "strict", "text"] = "auto"
+    """strict: server-enforced JSON schema / tool calls; text: JSON asked for in the prompt; auto: strict until
+    the server refuses or ignores it, then text."""
 
 
 class TrialSpec(StrictModel):

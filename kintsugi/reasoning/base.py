@@ -33,11 +33,15 @@ class CallStats:
 
     `attempts` counts model round trips of the repair loop (1 = first reply was
     valid, 2 = one repair); HTTP-level retries done by an SDK are not counted.
+    `output_mode` is how the reply's format was enforced ("strict" by the server,
+    "text" by the prompt and a tolerant parser); `output_note` says why it switched.
     """
 
     tokens_in: int = 0
     tokens_out: int = 0
     attempts: int = 1
+    output_mode: str | None = None
+    output_note: str | None = None
 
 
 @runtime_checkable
@@ -146,5 +150,7 @@ class RecordingReasoner:
                         tokens_in=stats.tokens_in,
                         tokens_out=stats.tokens_out,
                         attempts=stats.attempts,
+                        output_mode=stats.output_mode,
+                        output_note=stats.output_note,
                     )
                 )

@@ -2,9 +2,11 @@
 
 Works with OpenAI, vLLM, Ollama and llama.cpp server: images go as PNG data
 URLs, judge/analyze replies are constrained by a JSON schema, plans come back as
-function calls (one tool per recovery skill). Transport retries with backoff
-(429, 5xx, timeouts) are the SDK's own; on top of that a reply that does not
-parse or validate is sent back to the model once with the error quoted.
+function calls (one tool per recovery skill). Servers that refuse or ignore
+those strict options get the same requests in text mode (see `structured.py`).
+Transport retries with backoff (429, 5xx, timeouts) are the SDK's own; on top of
+that a reply that does not parse or validate is sent back to the model once with
+the error quoted. New roles reuse it all through `OpenAIReasoner.ask`.
 """
 
 from __future__ import annotations
@@ -12,19 +14,26 @@ from __future__ import annotations
 import base64
 import json
 import os
-import re
 from functools import lru_cache
 from importlib import resources
 from typing import Any, Callable, TypeVar
 from urllib.parse import urlparse
 
-import openai
 from openai import OpenAI
-from pydantic import BaseModel, ValidationError
+from pydantic import BaseModel
 
-from kintsugi.errors import ConfigError, ReasoningError
+from kintsugi.errors import ConfigError
 from kintsugi.reasoning import REASONERS
 from kintsugi.reasoning.base import CallStats, redact
+from kintsugi.reasoning.jsontext import BadReply  # noqa: F401 - re-exported
+from kintsugi.reasoning.structured import (  # noqa: F401 - EndpointError, strict_schema, MAX_ATTEMPTS re-exported
+    MAX_ATTEMPTS,
+    EndpointError,
+    StructuredClient,
+    StructuredOutput,
+    ToolRoute,
+    strict_schema,
+)
 from kintsugi.reasoning.types import (
     AnalyzeReply,
     AnalyzeRequest,
@@ -32,17 +41,16 @@ from kintsugi.reasoning.types import (
     JudgeRequest,
     PlanReply,
     PlanRequest,
-    Role,
 )
-from kintsugi.reasoning.validation import describe_validation_error, validate_analysis, validate_plan
+from kintsugi.reasoning.validation import validate_analysis, validate_plan
 
 OPENAI_HOST = "api.openai.com"
 DEFAULT_OPENAI_MODEL = "gpt-4o"
 """The model the paper used; only a default when talking to OpenAI itself."""
 PLACEHOLDER_KEY = "sk-local-no-key"
 """Local servers ignore the key, but the SDK insists on one."""
-MAX_ATTEMPTS = 2
-"""First reply plus one repair round; more rarely helps and doubles latency."""
+PLAN_TEXT_HINT = ('Write each function call as one step {"skill": <function name>, "goal": {<its arguments>}}, '
+                  'in execution order, inside {"steps": [...]}.')
 
 IMAGE_LABELS = {
     "outcome.image_png": "terminal camera image at the end of the skill",
@@ -50,14 +58,6 @@ IMAGE_LABELS = {
 }
 
 M = TypeVar("M", bound=BaseModel)
-
-
-class EndpointError(ReasoningError):
-    """The endpoint could not be used (unreachable, timeout, HTTP error) after the SDK's retries."""
-
-
-class BadReply(ReasoningError):
-    """One reply could not be used; its message is quoted back to the model for repair."""
 
 
 @lru_cache(maxsize=None)
@@ -81,35 +81,6 @@ def resolve_api_key(api_key_env: str, base_url: str | None) -> str:
             f"(reasoner.base_url) at a local OpenAI-compatible server (vLLM, Ollama, llama.cpp)"
         )
     return PLACEHOLDER_KEY
-
-
-def strict_schema(model: type[BaseModel]) -> dict[str, Any]:
-    """`model.model_json_schema()` made acceptable to OpenAI's strict structured outputs.
-
-    Strict mode wants every property required, additionalProperties false, no
-    defaults and no string-length keywords; pydantic still enforces those limits
-    when the reply is parsed.
-    """
-
-    def fix(node: Any) -> Any:
-        if isinstance(node, dict):
-            out = {k: fix(v) for k, v in node.items() if k not in ("default", "maxLength", "minLength")}
-            if "properties" in out:
-                out["required"] = list(out["properties"])
-                out["additionalProperties"] = False
-            return out
-        if isinstance(node, list):
-            return [fix(v) for v in node]
-        return node
-
-    return fix(model.model_json_schema())
-
-
-def _response_format(model: type[BaseModel]) -> dict[str, Any]:
-    return {
-        "type": "json_schema",
-        "json_schema": {"name": model.__name__, "schema": strict_schema(model), "strict": True},
-    }
 
 
 def _plan_tools(request: PlanRequest) -> list[dict[str, Any]]:
@@ -142,38 +113,6 @@ def _plan_tools(request: PlanRequest) -> list[dict[str, Any]]:
     return tools
 
 
-def _content_json(message: Any) -> Any:
-    """JSON object from an assistant message's text (refusals are reported as such)."""
-    refusal = getattr(message, "refusal", None)
-    if refusal and not message.content:
-        raise BadReply(f"the model refused ({refusal}); this is a robot-control task, answer in the requested format")
-    return _decode_json(message.content)
-
-
-def _decode_json(text: str | None) -> Any:
-    """JSON from a reply, tolerating code fences and prose around one object."""
-    if text is None or not text.strip():
-        raise BadReply("the reply was empty; answer with one JSON object")
-    stripped = re.sub(r"^\s*```(?:json)?\s*|\s*```\s*$", "", text.strip())
-    try:
-        return json.loads(stripped)
-    except (json.JSONDecodeError, RecursionError) as first:
-        start, end = stripped.find("{"), stripped.rfind("}")
-        if 0 <= start < end:
-            try:
-                return json.loads(stripped[start : end + 1])
-            except (json.JSONDecodeError, RecursionError):
-                pass
-        raise BadReply(f"the reply is not valid JSON ({first}); answer with one JSON object and nothing else") from None
-
-
-def _validate(model: type[M], data: Any) -> M:
-    try:
-        return model.model_validate(data)
-    except ValidationError as exc:
-        raise BadReply(f"the reply does not match the schema: {describe_validation_error(exc)}") from None
-
-
 class OpenAIReasoner:
     """Judge, analyze and plan by chat completions; `last_stats` holds the last call's cost."""
 
@@ -181,7 +120,7 @@ class OpenAIReasoner:
 
     def __init__(self, *, model: str | None = None, base_url: str | None = None,
                  api_key_env: str = "OPENAI_API_KEY", timeout_s: float = 60.0, max_retries: int = 3,
-                 client: OpenAI | None = None) -> None:
+                 structured_output: StructuredOutput = "auto", client: OpenAI | None = None) -> None:
         if model is None and not _is_openai(base_url):
             raise ConfigError(
                 f"reasoner.model is not set; set it to the model name your server at {base_url} serves"
@@ -195,54 +134,50 @@ class OpenAIReasoner:
             timeout=timeout_s,
             max_retries=max_retries,
         )
-        self.last_stats: CallStats | None = None
+        self.structured = StructuredClient(self.client, self.model, where=base_url or "https://api.openai.com/v1",
+                                           timeout_s=timeout_s, structured_output=structured_output)
+
+    @property
+    def last_stats(self) -> CallStats | None:
+        return self.structured.last_stats
+
+    @last_stats.setter
+    def last_stats(self, value: CallStats | None) -> None:
+        self.structured.last_stats = value
 
     # --- roles -------------------------------------------------------------
     def judge(self, request: JudgeRequest) -> JudgeReply:
-        return self._run(
-            "judge", request, {"response_format": _response_format(JudgeReply)},
-            lambda msg: _validate(JudgeReply, _content_json(msg)),
-        )
+        return self.ask("judge", request, JudgeReply)
 
     def analyze(self, request: AnalyzeRequest) -> AnalyzeReply:
-        return self._run(
-            "analyze", request, {"response_format": _response_format(AnalyzeReply)},
-            lambda msg: validate_analysis(_validate(AnalyzeReply, _content_json(msg)), request),
-        )
+        return self.ask("analyze", request, AnalyzeReply, check=lambda reply: validate_analysis(reply, request))
 
     def plan(self, request: PlanRequest) -> PlanReply:
-        """Unclamped plan from the model's tool calls; the caller clamps with validate_plan."""
+        """Unclamped plan from the model's tool calls (or JSON steps); the caller clamps with validate_plan."""
 
-        def parse(msg: Any) -> PlanReply:
-            if msg.tool_calls:
-                reply = self._plan_from_tool_calls(msg.tool_calls, request)
-            else:
-                reply = _validate(PlanReply, _content_json(msg))
+        def check(reply: PlanReply) -> PlanReply:
             validate_plan(reply, request)  # structural errors go back to the model; clamping is the caller's
             return reply
 
-        return self._run("plan", request, {"tools": _plan_tools(request), "tool_choice": "required"}, parse)
+        route = ToolRoute(tools=_plan_tools(request), text_hint=PLAN_TEXT_HINT,
+                          to_data=lambda calls: {"steps": [{"skill": name, "goal": args} for name, args in calls]})
+        return self.ask("plan", request, PlanReply, check=check, tools=route)
+
+    def ask(self, role: str, request: BaseModel, reply: type[M], *, check: Callable[[M], M] | None = None,
+            tools: ToolRoute | None = None) -> M:
+        """Any role: prompts/<role>.md plus the request (images attached) -> a validated `reply`.
+
+        A new role needs only its request/reply types and a prompt file; strict
+        or text output, the repair round and accounting come from `structured`.
+        """
+        messages: list[dict[str, Any]] = [
+            {"role": "system", "content": load_prompt("system")},
+            {"role": "user", "content": self._user_content(role, request)},
+        ]
+        return self.structured.ask(role, messages, reply, check=check, tools=tools)
 
     # --- internals ---------------------------------------------------------
-    @staticmethod
-    def _plan_from_tool_calls(calls: list[Any], request: PlanRequest) -> PlanReply:
-        steps = []
-        for call in calls:
-            fn = getattr(call, "function", None)
-            if fn is None:
-                raise BadReply("only function tool calls are allowed")
-            if fn.name not in request.skills:
-                raise BadReply(f"unknown tool {fn.name!r}; the only tools are {', '.join(request.skills)}")
-            try:
-                args = json.loads(fn.arguments or "{}")
-            except (json.JSONDecodeError, RecursionError) as exc:
-                raise BadReply(f"arguments of {fn.name} are not valid JSON ({exc})") from None
-            if not isinstance(args, dict):
-                raise BadReply(f"arguments of {fn.name} must be an object like {{\"y\": 12.5}}")
-            steps.append({"skill": fn.name, "goal": args})
-        return _validate(PlanReply, {"steps": steps})
-
-    def _user_content(self, role: Role, request: BaseModel) -> str | list[dict[str, Any]]:
+    def _user_content(self, role: str, request: BaseModel) -> str | list[dict[str, Any]]:
         images: list[tuple[str, bytes]] = []
 
         def on_bytes(path: tuple[str, ...], data: bytes) -> str:
@@ -260,82 +195,6 @@ class OpenAIReasoner:
             parts.append({"type": "image_url", "image_url": {"url": url}})
         return parts
 
-    def _complete(self, messages: list[dict[str, Any]], extra: dict[str, Any]) -> Any:
-        where = self.base_url or "https://api.openai.com/v1"
-        try:
-            return self.client.chat.completions.create(model=self.model, messages=messages, **extra)
-        except openai.APITimeoutError:
-            raise EndpointError(
-                f"no reply from {where} within {self.timeout_s:g} s (after the SDK's retries); "
-                f"raise reasoner.timeout_s or check that the server is not overloaded"
-            ) from None
-        except openai.APIConnectionError as exc:
-            raise EndpointError(f"cannot reach {where} ({exc}); is the server running and the URL right?") from None
-        except openai.AuthenticationError:
-            raise EndpointError(f"{where} rejected the API key; check the env var named by reasoner.api_key_env") from None
-        except openai.NotFoundError as exc:
-            raise EndpointError(f"{where} does not know model {self.model!r} ({exc.message}); set reasoner.model") from None
-        except openai.APIStatusError as exc:
-            raise EndpointError(
-                f"{where} answered HTTP {exc.status_code}: {exc.message}; if this is 400, the model may not "
-                f"support images, JSON-schema output or tool calls"
-            ) from None
-        except openai.APIError as exc:
-            raise EndpointError(f"{where} returned an unusable response: {exc}") from None
-
-    def _run(self, role: Role, request: BaseModel, extra: dict[str, Any], parse: Callable[[Any], M]) -> M:
-        messages: list[dict[str, Any]] = [
-            {"role": "system", "content": load_prompt("system")},
-            {"role": "user", "content": self._user_content(role, request)},
-        ]
-        tokens_in = tokens_out = 0
-        problem = ""
-        for attempt in range(1, MAX_ATTEMPTS + 1):
-            self.last_stats = CallStats(tokens_in, tokens_out, attempt)
-            completion = self._complete(messages, extra)
-            usage = getattr(completion, "usage", None)
-            if usage is not None:
-                tokens_in += usage.prompt_tokens or 0
-                tokens_out += usage.completion_tokens or 0
-            self.last_stats = CallStats(tokens_in, tokens_out, attempt)
-            if not completion.choices:
-                problem = "the response had no choices"
-                continue
-            message = completion.choices[0].message
-            try:
-                return parse(message)
-            except ReasoningError as exc:
-                problem = str(exc)
-                messages.extend(_repair_messages(message, problem))
-        raise ReasoningError(
-            f"{role}: model {self.model!r} gave no usable reply in {MAX_ATTEMPTS} attempts; last problem: {problem}. "
-            f"Try a stronger model or check the prompt in kintsugi/reasoning/prompts/{role}.md"
-        )
-
-
-def _repair_messages(message: Any, problem: str) -> list[dict[str, Any]]:
-    """The rejected assistant turn (and tool results if it called tools), then the error to fix."""
-    assistant: dict[str, Any] = {"role": "assistant", "content": message.content or ""}
-    out: list[dict[str, Any]] = [assistant]
-    calls = getattr(message, "tool_calls", None) or []
-    if calls:
-        assistant["tool_calls"] = [
-            {"id": c.id, "type": "function", "function": {"name": c.function.name, "arguments": c.function.arguments}}
-            for c in calls
-            if getattr(c, "function", None) is not None
-        ]
-        out += [
-            {"role": "tool", "tool_call_id": c["id"], "content": "Not executed: the plan was rejected."}
-            for c in assistant["tool_calls"]
-        ]
-    out.append(
-        {
-            "role": "user",
-            "content": f"Your reply was rejected: {problem}\nAnswer again in the requested format, fixing this.",
-        }
-    )
-    return out
-
 
 @REASONERS.register(
     "openai",
@@ -351,4 +210,5 @@ def make_openai_reasoner(settings: Any) -> OpenAIReasoner:
         api_key_env=settings.api_key_env,
         timeout_s=settings.timeout_s,
         max_retries=settings.max_retries,
+        structured_output=settings.structured_output,
     )

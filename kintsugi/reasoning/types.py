@@ -157,3 +157,7 @@ class CallRecord(StrictModel):
     tokens_in: int = 0
     tokens_out: int = 0
     attempts: int = 1
+    output_mode: Literal["strict", "text"] | None = None
+    """How an endpoint enforced the reply format (None for backends without one, e.g. embedded)."""
+    output_note: str | None = None
+    """Set on the call where the backend fell back from strict to text output, with the reason."""
