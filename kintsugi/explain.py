@@ -1,4 +1,8 @@
-"""`kintsugi explain`: a trial record told as a story, with the reasoning transcript."""
+"""`kintsugi explain`: a trial record told as a story, with the reasoning transcript.
+
+Everything printed comes from a record (model replies, names, errors), so all of it is
+escaped: a reply holding `[/INST]` is shown as written, never parsed as Rich markup.
+"""
 
 from __future__ import annotations
 
@@ -7,56 +11,83 @@ from pathlib import Path
 
 from pydantic import ValidationError
 from rich.console import Console
+from rich.markup import escape
 from rich.panel import Panel
+from rich.text import Text
 
 from kintsugi.errors import KintsugiError
-from kintsugi.trial import TrialRecord
+from kintsugi.trial import Event, TrialRecord
+
+_SAME_TIME_S = 1e-3  # skill durations are rounded to 0.1 ms; their sums drift a little
 
 
 def load_record(path: Path, key: str | None = None) -> TrialRecord:
-    """One record from a .json file, or the one with `key` (or the only one) from a .jsonl file."""
+    """One record from a .json file, or the one with `key` (or the only one) from a .jsonl file or a campaign dir.
+
+    `key` may be written with `/` (as in records) or `__` (as in record and video file names).
+    """
+    if path.is_dir():
+        path = path / "results.jsonl"
     try:
         text = path.read_text()
     except OSError as exc:
-        raise KintsugiError(f"cannot read {path}: {exc}") from None
+        raise KintsugiError(f"cannot read {path}: {exc.strerror or exc}") from None
     try:
         if path.suffix == ".jsonl":
             recs = [TrialRecord.model_validate_json(line) for line in text.splitlines() if line.strip()]
-            if key is not None:
-                recs = [r for r in recs if r.key == key]
-            if len(recs) != 1:
-                raise KintsugiError(f"{path} holds {len(recs)} matching records; pass --key <task/method/...>")
-            return recs[0]
-        return TrialRecord.model_validate_json(text)
+        else:
+            recs = [TrialRecord.model_validate_json(text)]
     except ValidationError as exc:
         raise KintsugiError(f"{path} is not a kintsugi trial record: {exc.errors()[0]['msg']}") from None
+    if key is not None:
+        recs = [r for r in recs if key in (r.key, r.key.replace("/", "__"))]
+    if len(recs) != 1:
+        raise KintsugiError(f"{path} holds {len(recs)} records matching {key!r}; "
+                            "pass --key task/method/variant/condition/seed")
+    return recs[0]
 
 
 def _print_call(call: dict, console: Console) -> None:
     body = json.dumps(call.get("reply"), indent=1) if call.get("reply") else f"error: {call.get('error', '')}"
-    console.print(Panel(body, title=f"{call['role']} ({call['backend']}, {call.get('latency_s', 0):.3f} s, "
-                                    f"{call.get('tokens_in', 0)}+{call.get('tokens_out', 0)} tokens)"))
+    title = (f"{call.get('role', '?')} ({call.get('backend', '?')}, {call.get('latency_s', 0):.3f} s, "
+             f"{call.get('tokens_in', 0)}+{call.get('tokens_out', 0)} tokens)")
+    console.print(Panel(Text(body), title=escape(title)))
+
+
+def _print_event(e: Event, console: Console) -> None:
+    console.print(Text(f"event {e.t:.2f}s {e.kind}: {e.detail}"))
 
 
 def explain_record(rec: TrialRecord, console: Console) -> None:
-    console.rule(f"[bold]{rec.key}[/bold]")
-    console.print(f"hidden truth: {json.dumps(rec.params)}")
+    """Skills in order, each checked one followed by its judge/analyze/plan calls, and events
+    (plan clamps, timeouts, errors) where they happened: after the skill that ended at or after their time.
+
+    A skill's `sim_time` is its duration; skills run back to back from t = 0, so their running sum is
+    the time each one ended.
+    """
+    console.rule(f"[bold]{escape(rec.key)}[/bold]")
+    console.print(Text(f"hidden truth: {json.dumps(rec.params)}"))
     calls = list(rec.transcript)
+    events = sorted(rec.events, key=lambda e: e.t)  # stable: same-time events keep their order
+    t_end = 0.0
     for s in rec.skills:
+        t_end += s.sim_time
         verdict = "" if s.verdict is None else (" -> [green]success[/green]" if s.verdict else " -> [red]failure[/red]")
         flags = "reached" if s.reached else ("compression limit" if s.compression_limit else "timeout")
-        console.print(f"[bold]{s.skill}[/bold]{' (recovery)' if s.recovery else ''} goal {s.goal} -> {flags}{verdict}")
-        if s.verdict is None:
-            continue
-        # A checked skill owns one judge call and, on failure, the analyze/plan calls that follow it.
-        while calls:
-            _print_call(calls.pop(0), console)
-            if not calls or calls[0]["role"] == "judge":
-                break
+        console.print(f"[bold]{escape(s.skill)}[/bold]{' (recovery)' if s.recovery else ''} "
+                      f"goal {escape(str(s.goal))} -> {flags}{verdict}")
+        if s.verdict is not None:
+            # A checked skill owns one judge call and, on failure, the analyze/plan calls that follow it.
+            while calls:
+                _print_call(calls.pop(0), console)
+                if not calls or calls[0].get("role") == "judge":
+                    break
+        while events and events[0].t <= t_end + _SAME_TIME_S:
+            _print_event(events.pop(0), console)
     for call in calls:  # calls that no skill claimed (e.g. the trial ended in a reasoning error)
         _print_call(call, console)
-    for e in rec.events:
-        console.print(f"event {e.t:.2f}s {e.kind}: {e.detail}")
+    for e in events:
+        _print_event(e, console)
     verdict = "SUCCESS" if rec.success else "FAILURE"
     console.print(f"[bold]ground truth {verdict}[/bold], framework {'success' if rec.framework_success else 'failure'}"
-                  f"{', error: ' + rec.error if rec.error else ''}")
+                  + escape(f", error: {rec.error}" if rec.error else ""))

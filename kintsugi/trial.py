@@ -142,13 +142,22 @@ class TrialLog:
 
     def event(self, t: float, kind: str, detail: str = "") -> None:
         self.events.append(Event(t=round(t, 4), kind=kind, detail=detail))
-        self.say(f"[dim]{t:6.2f}s[/dim] {kind}: {detail}")
+        if self._echo is not None:
+            from rich.markup import escape
+
+            self.say(f"[dim]{t:6.2f}s[/dim] {escape(kind)}: {escape(detail)}", markup=True)
 
     def transition(self, failed: str, first_recovery: str) -> None:
         self.transitions.append((failed, first_recovery))
 
-    def say(self, text: str) -> None:
+    def say(self, text: str, markup: bool = False) -> None:
+        """Tell one line of the story. The text is shown verbatim (a model reply may hold `[/INST]`);
+        with `markup=True` it is Rich markup, and the caller must `rich.markup.escape` dynamic parts."""
         if self._echo is not None:
+            if not markup:
+                from rich.markup import escape  # lazy: workers without an echo never import rich
+
+                text = escape(text)
             self._echo(text)
 
     def status(self, label: str, verdict: str | None = None) -> None:

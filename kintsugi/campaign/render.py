@@ -7,6 +7,7 @@ from typing import Iterable
 
 from rich import box
 from rich.console import Console
+from rich.markup import escape
 from rich.measure import Measurement
 from rich.table import Table
 
@@ -16,16 +17,17 @@ _LEFT = {"Method", "Variant", "Condition", "From \\ To"}
 
 
 def to_rich(t: TextTable) -> Table:
+    """Every string is escaped: names and values come from records and users, not from us."""
     table = Table(
-        title=t.title, caption=" ".join(t.notes) or None, caption_justify="left",
+        title=escape(t.title), caption=escape(" ".join(t.notes)) or None, caption_justify="left",
         box=box.SIMPLE_HEAD, pad_edge=False,
     )
     for i, col in enumerate(t.columns):
         # Cells never wrap (an interval split over two lines is unreadable); headers may.
         widest = max((len(row[i]) for row in t.rows), default=1)
-        table.add_column(col, justify="left" if col in _LEFT else "right", min_width=widest)
+        table.add_column(escape(col), justify="left" if col in _LEFT else "right", min_width=widest)
     for row in t.rows:
-        table.add_row(*row)
+        table.add_row(*(escape(v) for v in row))
     return table
 
 

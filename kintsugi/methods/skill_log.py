@@ -20,5 +20,5 @@ def log_skill(log: TrialLog, r: SkillResult, t: float, recovery: bool = False,
     flags = "reached" if r.reached else ("COMPRESSION LIMIT" if r.compression_limit else "timeout")
     goal_txt = ", ".join(f"{a}={v:.1f}" for a, v in entry.goal.items())
     log.say(f"[dim]{t:6.2f}s[/dim] CF{SKILLS[r.skill].cf} [bold]{r.skill}[/bold]{' (recovery)' if recovery else ''}"
-            f" goal {goal_txt} -> {flags}, wrist {r.compression * 1000:.1f} mm")
+            f" goal {goal_txt} -> {flags}, wrist {r.compression * 1000:.1f} mm", markup=True)
     return entry
