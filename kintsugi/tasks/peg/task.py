@@ -13,7 +13,7 @@ from kintsugi.tasks.peg.conditions import sample_params
 from kintsugi.tasks.peg.config import CONDITIONS, PegTaskConfig
 from kintsugi.tasks.peg.context import PegContext
 from kintsugi.tasks.peg.robot import PegRobot
-from kintsugi.tasks.peg.shapes import SHAPES_HELP
+from kintsugi.tasks.peg.shapes import SHAPES_HELP, peg_shape
 from kintsugi.tasks.peg.world import PegWorld
 from kintsugi.trial import TrialLog, TrialRecord, TrialSpec
 from kintsugi.video import VideoRecorder
@@ -31,6 +31,10 @@ class PegInsertionTask:
     def config(self, overrides: dict | list) -> PegTaskConfig:
         return apply_overrides(PegTaskConfig(), overrides)
 
+    def check_variant(self, name: str, cfg: PegTaskConfig) -> None:
+        """Raise ConfigError for an unknown peg shape (campaign validation, before any trial)."""
+        peg_shape(name, cfg)
+
     def run(self, spec: TrialSpec, echo: Callable[[str], None] | None = None) -> TrialRecord:
         import kintsugi.methods.builtin  # noqa: F401 - registers the built-in methods
 
@@ -38,17 +42,15 @@ class PegInsertionTask:
         cfg = self.config(spec.overrides)
         params = sample_params(cfg, spec.variant, spec.condition, spec.seed)
         method_factory = METHODS.get(spec.method).factory
-        ctx = PegContext(cfg=cfg, shape=spec.variant, seed=spec.seed, reasoner=spec.reasoner)
+        ctx = PegContext(cfg=cfg, shape=spec.variant, reasoner=spec.reasoner)  # no seed: it would re-draw the truth
         method = method_factory(ctx)
         recorder = VideoRecorder() if spec.video else None
         world = PegWorld(cfg, params)
-        robot = PegRobot(world, on_tick=recorder.on_tick if recorder else None)
+        robot = PegRobot(world, spec.variant, on_tick=recorder.on_tick if recorder else None)
 
         def on_status(label: str, verdict: str | None) -> None:
             if recorder is not None:
-                recorder.label = label
-                if verdict is not None:
-                    recorder.verdict = verdict
+                recorder.status(label, verdict)
 
         log = TrialLog(echo=echo, on_status=on_status)
         error = None
@@ -61,6 +63,9 @@ class PegInsertionTask:
         truth = world.ground_truth()
         video = None
         if recorder is not None and recorder.frames:
+            ok = framework_success and error is None  # scored: the recorder may show the truth now
+            recorder.finish(f"outcome: ground truth G {'SUCCESS' if truth.success else 'FAILURE'}, "
+                            f"framework F {'success' if ok else 'failure'}", truth.success)
             video = str(recorder.save(spec.video))
         world.close()
         calls = log.transcript
