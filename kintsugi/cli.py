@@ -2,24 +2,52 @@
 
 from __future__ import annotations
 
+import re
+import traceback
 from pathlib import Path
 from typing import Annotated, Optional
 
 import typer
 from rich.console import Console
+from rich.errors import MarkupError
+from rich.markup import escape
 from rich.table import Table
 
 from kintsugi.errors import KintsugiError
 
 app = typer.Typer(add_completion=False, no_args_is_help=True,
                   help="kintsugi: resilient robot manipulation with reasoned checks and recovery, on MuJoCo.")
-console = Console()
+# soft_wrap: piped output (CI, log files) must not be hard-wrapped at 80 columns.
+console = Console(soft_wrap=True)
+err_console = Console(stderr=True, soft_wrap=True)
 
 SetOpt = Annotated[Optional[list[str]], typer.Option("--set", help="config override key.path=value (repeatable)")]
 ReasonerOpt = Annotated[str, typer.Option(help="reasoner backend: embedded (offline) or openai")]
 ModelOpt = Annotated[Optional[str], typer.Option(help="model name for the openai backend")]
 BaseUrlOpt = Annotated[Optional[str], typer.Option(help="OpenAI-compatible endpoint (vLLM, Ollama, llama.cpp)")]
 KeyEnvOpt = Annotated[str, typer.Option(help="environment variable holding the API key")]
+
+
+def _version(value: bool) -> None:
+    if value:
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            number = version("kintsugi")
+        except PackageNotFoundError:  # running from a source tree that was never installed
+            import kintsugi
+
+            number = kintsugi.__version__
+        console.print(f"kintsugi {number}", highlight=False)
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    version: Annotated[bool, typer.Option("--version", callback=_version, is_eager=True,
+                                          help="print the installed version and exit")] = False,
+) -> None:
+    """kintsugi: resilient robot manipulation with reasoned checks and recovery, on MuJoCo."""
 
 
 def _csv(text: str) -> list[str]:
@@ -32,21 +60,38 @@ def _reasoner(backend: str, model: str | None, base_url: str | None, key_env: st
     return ReasonerSettings(backend=backend, model=model, base_url=base_url, api_key_env=key_env)
 
 
-def _overrides(task_name: str, sets: list[str] | None) -> dict:
-    """Validate `--set` against the task's typed config now, so a typo fails before any trial runs."""
+def _overrides(sets: list[str] | None) -> dict:
+    """Parse `--set key.path=value`; campaign validation checks them against the task's typed config."""
     from kintsugi.config import parse_override
-    from kintsugi.tasks import TASKS, load_all
 
-    load_all()
-    task = TASKS.get(task_name).factory()
-    pairs = dict((".".join(k), v) for k, v in (parse_override(s) for s in sets or []))
-    task.config(pairs)
-    return pairs
+    return dict((".".join(k), v) for k, v in (parse_override(s) for s in sets or []))
 
 
-def _fail(exc: Exception) -> None:
-    console.print(f"[bold red]error:[/bold red] {exc}")
-    raise typer.Exit(code=2)
+def _fail(exc: Exception | str, code: int = 2) -> None:
+    """One line on stderr naming the problem, then a non-zero exit (2: bad input, 1: a trial failed to run)."""
+    err_console.print(f"[bold red]error:[/bold red] {escape(str(exc))}")
+    raise typer.Exit(code=code)
+
+
+def _echo(text: str) -> None:
+    """Print one line of a trial's story; a line that is not valid markup is shown verbatim, never fatal."""
+    try:
+        console.print(text)
+    except MarkupError:
+        console.print(escape(text))
+
+
+def _record_path(spec) -> Path:  # noqa: ANN001 - a TrialSpec
+    """runs/<task>__<method>__<variant>__<condition>__<seed>__<reasoner>.json: another reasoner
+    (or model) never overwrites the record of the same trial."""
+    r = spec.reasoner
+    model = r.model
+    if model is None and r.backend == "openai":
+        from kintsugi.reasoning.openai_backend import DEFAULT_OPENAI_MODEL
+
+        model = DEFAULT_OPENAI_MODEL
+    who = re.sub(r"[^A-Za-z0-9._+-]+", "-", r.backend + (f"-{model}" if model else ""))
+    return Path("runs") / f"{spec.key.replace('/', '__')}__{who}.json"
 
 
 @app.command()
@@ -55,39 +100,58 @@ def run(
     method: Annotated[str, typer.Option(help="registered method, see `kintsugi methods`")] = "baseline",
     shape: Annotated[str, typer.Option("--shape", "--variant", help="task variant (peg shape)")] = "round",
     condition: Annotated[str, typer.Option(help="randomized condition: none, friction, pose, all")] = "none",
-    seed: int = 0,
+    seed: Annotated[int, typer.Option(min=0, help="seed of the condition's random draws (hole offset, grasp "
+                                                  "angle, friction); the same seed gives the same trial")] = 0,
     video: Annotated[Optional[Path], typer.Option(help="write an .mp4 or .gif of the scene camera")] = None,
-    record: Annotated[Optional[Path], typer.Option(help="trial record JSON (default runs/<key>.json)")] = None,
+    record: Annotated[Optional[Path], typer.Option(
+        help="trial record .json (default runs/<task>__<method>__<variant>__<condition>__<seed>__<reasoner>.json)")
+    ] = None,
     set_: SetOpt = None,
     reasoner: ReasonerOpt = "embedded",
     model: ModelOpt = None,
     base_url: BaseUrlOpt = None,
     api_key_env: KeyEnvOpt = "OPENAI_API_KEY",
 ) -> None:
-    """Run one trial, tell its story skill by skill, and save its record (and video)."""
-    from kintsugi.tasks import TASKS
-    from kintsugi.trial import TrialSpec
+    """Run one trial, tell its story skill by skill, and save its record (and video).
 
-    try:
-        spec = TrialSpec(task=task, method=method, variant=shape, condition=condition, seed=seed,
-                         overrides=_overrides(task, set_), reasoner=_reasoner(reasoner, model, base_url, api_key_env),
-                         video=str(video) if video else None)
-        console.rule(f"[bold]{spec.key}[/bold]")
-        result = TASKS.get(task).factory().run(spec, echo=console.print)
+    Exits 1 when the trial recorded an error (e.g. an unreachable endpoint); the record is saved first.
+    """
+    from kintsugi.campaign.executors import failed_record
+    from kintsugi.campaign.plan import build_config, expand
+    from kintsugi.campaign.runner import first_line
+    from kintsugi.outputs import check_output_file
+    from kintsugi.tasks import TASKS
+    from kintsugi.video import check_video_path
+
+    try:  # every name, setting and output path is checked before the trial spends anything
+        cfg = build_config(task=task, methods=[method], variants=[shape], conditions=[condition], trials=1,
+                           base_seed=seed, overrides=_overrides(set_),
+                           reasoner=_reasoner(reasoner, model, base_url, api_key_env))
+        spec = expand(cfg)[0].model_copy(update={"video": str(check_video_path(video)) if video else None})
+        path = check_output_file(record or _record_path(spec), "record", (".json",))
     except KintsugiError as exc:
         _fail(exc)
         return
-    path = record or Path("runs") / (spec.key.replace("/", "__") + ".json")
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(result.model_dump_json(indent=2))
+    console.rule(f"[bold]{escape(spec.key)}[/bold]")
+    try:
+        result = TASKS.get(task).factory().run(spec, echo=_echo)
+    except KintsugiError as exc:  # e.g. the video could not be encoded: keep what is known
+        result = failed_record(spec, f"{type(exc).__name__}: {exc}")
+    except Exception as exc:  # noqa: BLE001 - a bug in a task: record it with its traceback, do not crash
+        result = failed_record(spec, f"{type(exc).__name__}: {exc}\n{traceback.format_exc(limit=4)}")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(result.model_dump_json(indent=2))
+    except OSError as exc:
+        _fail(f"cannot write the record {path}: {exc}")
     colour = "green" if result.success else "red"
     console.print(f"[bold {colour}]ground truth: {'SUCCESS' if result.success else 'FAILURE'}[/bold {colour}]"
                   f"  framework verdict: {'success' if result.framework_success else 'failure'}"
                   f"  sim {result.sim_time:.2f} s, wall {result.wall_time:.2f} s, "
                   f"{result.reasoning_calls} reasoning calls")
+    console.print(escape(f"record: {path}" + (f"   video: {result.video}" if result.video else "")))
     if result.error:
-        console.print(f"[red]error:[/red] {result.error}")
-    console.print(f"record: {path}" + (f"   video: {result.video}" if result.video else ""))
+        _fail(f"the trial recorded an error: {first_line(result.error)}", code=1)
 
 
 @app.command()
@@ -96,12 +160,13 @@ def bench(
     methods: Annotated[str, typer.Option(help="comma-separated methods")] = "baseline",
     shapes: Annotated[str, typer.Option("--shapes", "--variants", help="comma-separated variants")] = "round",
     conditions: Annotated[str, typer.Option(help="comma-separated conditions")] = "none,friction,pose,all",
-    trials: Annotated[int, typer.Option(help="trials per cell")] = 30,
-    workers: Annotated[int, typer.Option(help="parallel worker processes")] = 2,
+    trials: Annotated[int, typer.Option(min=1, help="trials per cell")] = 30,
+    workers: Annotated[int, typer.Option(min=1, help="parallel worker processes")] = 2,
     out: Annotated[Path, typer.Option(help="campaign directory (results.jsonl, report)")] = Path("runs/campaign"),
     executor: Annotated[str, typer.Option(help="process (default), inline, or ray")] = "process",
-    base_seed: int = 0,
-    videos_per_cell: Annotated[int, typer.Option(help="record videos of the first N trials per cell")] = 0,
+    base_seed: Annotated[int, typer.Option(min=0, help="trial i of every cell uses seed base_seed + i, "
+                                                       "so methods meet the same random draws")] = 0,
+    videos_per_cell: Annotated[int, typer.Option(min=0, help="record videos of the first N trials per cell")] = 0,
     plugin: Annotated[Optional[list[str]], typer.Option(help="module to import in workers (extra tasks)")] = None,
     set_: SetOpt = None,
     reasoner: ReasonerOpt = "embedded",
@@ -109,17 +174,20 @@ def bench(
     base_url: BaseUrlOpt = None,
     api_key_env: KeyEnvOpt = "OPENAI_API_KEY",
 ) -> None:
-    """Run (or resume) a campaign; print the paper's tables and write report.md / report.html."""
-    from kintsugi.campaign.plan import CampaignConfig
+    """Run (or resume) a campaign; print the paper's tables and write report.md / report.html.
+
+    Every name and setting is checked before the first trial. Exits 1 when any trial errored.
+    """
+    from kintsugi.campaign.plan import build_config
     from kintsugi.campaign.render import print_tables
     from kintsugi.campaign.report import write_report
-    from kintsugi.campaign.runner import run_campaign
+    from kintsugi.campaign.runner import error_summary, run_campaign
     from kintsugi.campaign.tables import all_tables
 
     try:
-        cfg = CampaignConfig(
+        cfg = build_config(
             task=task, methods=_csv(methods), variants=_csv(shapes), conditions=_csv(conditions), trials=trials,
-            base_seed=base_seed, overrides=_overrides(task, set_), plugins=plugin or [],
+            base_seed=base_seed, overrides=_overrides(set_), plugins=plugin or [],
             reasoner=_reasoner(reasoner, model, base_url, api_key_env), videos_per_cell=videos_per_cell)
         records = run_campaign(cfg, out, workers=workers, executor=executor)
         print_tables(all_tables(records, cfg), console)
@@ -127,7 +195,10 @@ def bench(
     except KintsugiError as exc:
         _fail(exc)
         return
-    console.print(f"results: {out / 'results.jsonl'}   report: {md}, {html}")
+    console.print(escape(f"results: {out / 'results.jsonl'}   report: {md}, {html}"))
+    errors = error_summary(records)
+    if errors:
+        _fail(errors, code=1)
 
 
 @app.command()
@@ -136,6 +207,7 @@ def report(out: Annotated[Path, typer.Argument(help="campaign directory")]) -> N
     from kintsugi.campaign.plan import expand
     from kintsugi.campaign.render import print_tables
     from kintsugi.campaign.report import write_report
+    from kintsugi.campaign.runner import error_summary
     from kintsugi.campaign.store import ResultStore
     from kintsugi.campaign.tables import all_tables
 
@@ -149,7 +221,10 @@ def report(out: Annotated[Path, typer.Argument(help="campaign directory")]) -> N
     except KintsugiError as exc:
         _fail(exc)
         return
-    console.print(f"report: {md}, {html}")
+    console.print(escape(f"report: {md}, {html}"))
+    errors = error_summary(records)
+    if errors:
+        err_console.print(f"[yellow]note:[/yellow] {escape(errors)}")
 
 
 def _list(title: str, registry) -> None:  # noqa: ANN001 - a Registry
@@ -158,7 +233,7 @@ def _list(title: str, registry) -> None:  # noqa: ANN001 - a Registry
     table.add_column("description")
     table.add_column("tags", style="dim")
     for entry in registry:
-        table.add_row(entry.name, entry.description, ", ".join(sorted(entry.tags)))
+        table.add_row(escape(entry.name), escape(entry.description), escape(", ".join(sorted(entry.tags))))
     console.print(table)
 
 
@@ -171,9 +246,11 @@ def tasks() -> None:
     _list("tasks", TASKS)
     for entry in TASKS:
         t = entry.factory()
-        console.print(f"[bold]{entry.name}[/bold] variants: {t.variants_help}")
-        for name, text in t.conditions.items():
-            console.print(f"  condition [bold]{name}[/bold]: {text}")
+        console.print(f"[bold]{escape(entry.name)}[/bold] variants: {escape(str(getattr(t, 'variants_help', '')))}")
+        conditions = getattr(t, "conditions", {})
+        for name in conditions:
+            text = conditions[name] if isinstance(conditions, dict) else ""
+            console.print(f"  condition [bold]{escape(name)}[/bold]: {escape(text)}")
 
 
 @app.command()
@@ -197,7 +274,8 @@ def reasoners() -> None:
 @app.command()
 def explain(
     path: Annotated[Path, typer.Argument(help="a trial record (.json) or a campaign's results.jsonl")],
-    key: Annotated[Optional[str], typer.Option(help="trial key, when PATH holds many records")] = None,
+    key: Annotated[Optional[str], typer.Option(
+        help="trial key when PATH holds many records: task/method/variant/condition/seed (or with __)")] = None,
 ) -> None:
     """Print a trial's story: each skill, its verdict, and the full reasoning transcript."""
     from kintsugi.explain import explain_record, load_record

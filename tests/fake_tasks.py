@@ -50,6 +50,8 @@ def _maybe_crash(spec: TrialSpec) -> None:
 
 
 class FakeCoinTask:
+    methods = ("baseline", "recover")  # its own methods, not the METHODS registry
+
     def run(self, spec: TrialSpec) -> TrialRecord:
         rng = np.random.default_rng(spec.seed)
         if spec.variant == "raises" and spec.seed % 2 == 0:

@@ -9,9 +9,10 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
-from pydantic import Field, field_validator
+from pydantic import Field, ValidationError, field_validator
 
 from kintsugi.config import StrictModel
+from kintsugi.errors import ConfigError
 from kintsugi.trial import ReasonerSettings, TrialSpec
 
 # Fields that may change between runs into the same out dir: the trial count may
@@ -64,6 +65,65 @@ def _check_name(name: str, what: str) -> None:
     # Names go into trial keys "task/method/variant/condition/seed" and file names.
     if not name or "/" in name or name != name.strip():
         raise ValueError(f"{what} name {name!r} must be non-empty, without '/' or surrounding spaces")
+
+
+def build_config(**fields: Any) -> CampaignConfig:
+    """A CampaignConfig from user input (the CLI's `run` and `bench`), fully validated before any trial.
+
+    The task is looked up first, so a mistyped task name reads "unknown task", and every
+    problem is a one-line KintsugiError rather than a pydantic traceback.
+    """
+    from kintsugi.campaign.bootstrap import bootstrap
+
+    bootstrap(list(fields.get("plugins") or []), str(fields.get("task", "")))
+    try:
+        cfg = CampaignConfig(**fields)
+    except ValidationError as exc:
+        problems = "; ".join(f"{'.'.join(str(p) for p in e['loc']) or 'config'}: {e['msg']}" for e in exc.errors())
+        raise ConfigError(f"bad campaign setting: {problems}") from None
+    validate(cfg)
+    return cfg
+
+
+def validate(cfg: CampaignConfig) -> None:
+    """Check every name and setting a campaign uses, so a typo fails before the first trial, not in every one.
+
+    In order: task and plugins, methods, `--set` overrides against the task's typed config,
+    variants, conditions, the reasoner backend and its settings (building it checks e.g. that
+    the openai backend has a key or a base URL). A task opts in to the finer checks with
+    `methods` (the names it runs, when it does not use the METHODS registry), `config(overrides)`,
+    `check_variant(name, config)` and `conditions`.
+    """
+    from kintsugi.campaign.bootstrap import bootstrap
+    from kintsugi.reasoning import make_reasoner
+    from kintsugi.tasks import TASKS
+
+    bootstrap(cfg.plugins, cfg.task)
+    task = TASKS.get(cfg.task).factory()
+    own_methods = getattr(task, "methods", None)
+    if own_methods is None:
+        import kintsugi.methods.builtin  # noqa: F401 - registers the built-in methods
+        from kintsugi.methods import METHODS
+
+        for name in cfg.methods:
+            METHODS.get(name)
+    else:
+        _known(cfg.methods, own_methods, f"method for task {cfg.task!r}")
+    config = task.config(cfg.overrides) if hasattr(task, "config") else None
+    check_variant = getattr(task, "check_variant", None)
+    if check_variant is not None:
+        for name in cfg.variants:
+            check_variant(name, config)
+    conditions = getattr(task, "conditions", None)
+    if conditions is not None:
+        _known(cfg.conditions, conditions, f"condition for task {cfg.task!r}")
+    make_reasoner(cfg.reasoner)
+
+
+def _known(names: list[str], known: Any, what: str) -> None:
+    for name in names:
+        if name not in known:
+            raise ConfigError(f"unknown {what}: {name!r}; known: {', '.join(known)}")
 
 
 def video_path(video_dir: Path, key: str) -> Path:

@@ -83,7 +83,7 @@ def extra_executions_plot(records: Sequence[TrialRecord], cfg: CampaignConfig | 
     if not skills or not methods:
         return None
     variants = _order([v for _, v, _ in group_by_cell(recs, cfg)])
-    fig, axes = _axes(len(variants), "Mean extra executions per contact formation (all conditions)")
+    fig, axes = _axes(len(variants), "Mean extra executions per contact formation (pooled over conditions)")
     width = 0.8 / len(methods)
     x = np.arange(len(skills))
     for ax, variant in zip(axes, variants):

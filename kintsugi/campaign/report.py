@@ -16,8 +16,10 @@ import kintsugi
 from kintsugi.campaign.plan import CampaignConfig
 from kintsugi.campaign.plots import extra_executions_plot, success_plot
 from kintsugi.campaign.render import to_html, to_markdown
+from kintsugi.campaign.runner import error_summary
 from kintsugi.campaign.store import ResultStore
 from kintsugi.campaign.tables import all_tables
+from kintsugi.errors import KintsugiError
 from kintsugi.trial import TrialRecord
 
 _CSS = """
@@ -48,6 +50,13 @@ def machine_info() -> dict[str, str]:
     }
 
 
+def _write(path: Path, text: str) -> None:
+    try:
+        path.write_text(text)
+    except OSError as exc:
+        raise KintsugiError(f"cannot write the report {path}: {exc}") from None
+
+
 def _records_for(cfg: CampaignConfig, records: Sequence[TrialRecord]) -> list[TrialRecord]:
     from kintsugi.campaign.plan import expand
 
@@ -73,13 +82,16 @@ def write_report(
     info = machine_info()
     cfg_json = json.dumps(cfg.model_dump(mode="json"), indent=2)
     summary = f"{len(recs)} of {len(cfg.cells()) * cfg.trials} trials recorded; task `{cfg.task}`."
+    errors = error_summary(recs)
+    if errors:
+        summary += f" {errors}."
 
     md = [f"# kintsugi campaign report — {cfg.task}", "", summary, ""]
     md += [to_markdown(t) for t in tables]
     md += ["## Campaign config", "", "```json", cfg_json, "```", "", "## Machine", ""]
     md += [f"- {k}: {v}" for k, v in info.items()]
     md_path = out / "report.md"
-    md_path.write_text("\n".join(md) + "\n")
+    _write(md_path, "\n".join(md) + "\n")
 
     images = [success_plot(recs, cfg) if recs else None, extra_executions_plot(recs, cfg)]
     figs = "".join(
@@ -100,5 +112,5 @@ def write_report(
         f"<body>{''.join(body)}</body></html>\n"
     )
     html_path = out / "report.html"
-    html_path.write_text(page)
+    _write(html_path, page)
     return md_path, html_path

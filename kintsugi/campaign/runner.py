@@ -9,6 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from rich.console import Console
+from rich.markup import escape
 from rich.progress import (
     BarColumn,
     MofNCompleteColumn,
@@ -18,9 +19,8 @@ from rich.progress import (
     TimeRemainingColumn,
 )
 
-from kintsugi.campaign.bootstrap import bootstrap
 from kintsugi.campaign.executors import failed_record, make_executor
-from kintsugi.campaign.plan import CampaignConfig, expand
+from kintsugi.campaign.plan import CampaignConfig, expand, validate
 from kintsugi.campaign.store import ResultStore
 from kintsugi.trial import TrialRecord, TrialSpec
 
@@ -49,12 +49,12 @@ def run_campaign(
 ) -> list[TrialRecord]:
     """Run (or resume) a campaign into `out_dir`; return the records of all its trials, in config order.
 
-    Raises KintsugiError before running anything if the task is unknown, a plugin
-    fails to import, the executor is unknown/unavailable, or `out_dir` holds a
-    campaign with a different config.
+    Raises KintsugiError before running anything if any name or setting is wrong
+    (`plan.validate`), the executor is unknown/unavailable, `out_dir` cannot be
+    written, or it holds a campaign with a different config.
     """
     out = Path(out_dir)
-    bootstrap(cfg.plugins, cfg.task)  # fail fast here rather than once per trial in workers
+    validate(cfg)  # fail fast here rather than once per trial in workers
     runner = make_executor(executor, workers, cfg.plugins)
     store = ResultStore(out)
     store.ensure_manifest(cfg)
@@ -66,14 +66,16 @@ def run_campaign(
     records = {r.key: r for r in store.read() if r.key in wanted}
     todo = [s for s in specs if s.key not in records]
 
-    console = console or Console(stderr=True)
+    console = console or Console(stderr=True, soft_wrap=True)
     ok = sum(r.success for r in records.values())
     err = sum(r.error is not None for r in records.values())
     if progress and records:
-        console.print(f"resuming {out}: {len(records)} of {len(specs)} trials already recorded")
+        console.print(escape(f"resuming {out}: {len(records)} of {len(specs)} trials already recorded"))
+    # A bar needs a terminal; in a log file (CI, nohup) it would print nothing until the end.
+    lines = progress and not console.is_terminal
 
-    with store.appender() as appender, _progress(console, progress) as bar:
-        task_id = bar.add_task(cfg.task, total=len(specs), completed=len(records), ok=ok, err=err)
+    with store.appender() as appender, _progress(console, progress and not lines) as bar:
+        task_id = bar.add_task(escape(cfg.task), total=len(specs), completed=len(records), ok=ok, err=err)
         for spec, record in runner.run(todo) if todo else ():
             record = _checked(spec, record)
             appender.append(record)
@@ -81,7 +83,30 @@ def run_campaign(
             ok += record.success
             err += record.error is not None
             bar.update(task_id, advance=1, ok=ok, err=err)
+            if lines:
+                console.print(escape(progress_line(record, len(records), len(specs), ok, err)), highlight=False)
     return [records[s.key] for s in specs if s.key in records]
+
+
+def progress_line(record: TrialRecord, done: int, total: int, ok: int, err: int) -> str:
+    """One plain line per finished trial, for logs: done/total, key, outcome, wall time, running counts."""
+    outcome = "success" if record.success else "failure"
+    line = f"{done}/{total} {record.key}: {outcome}, {record.wall_time:.2f} s wall ({ok} ok, {err} errors)"
+    return line + (f"; error: {first_line(record.error)}" if record.error else "")
+
+
+def first_line(text: str) -> str:
+    return next((ln.strip() for ln in text.splitlines() if ln.strip()), "")
+
+
+def error_summary(records: list[TrialRecord]) -> str | None:
+    """'N of M trials errored; first: key: message', or None when no trial errored."""
+    errored = [r for r in records if r.error]
+    if not errored:
+        return None
+    first = errored[0]
+    return (f"{len(errored)} of {len(records)} trials errored (they count as failures); "
+            f"first: {first.key}: {first_line(first.error or '')}")
 
 
 def _checked(spec: TrialSpec, record: TrialRecord) -> TrialRecord:

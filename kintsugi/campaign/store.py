@@ -19,6 +19,7 @@ from pydantic import ValidationError
 import kintsugi
 from kintsugi.campaign.plan import RESUMABLE_FIELDS, CampaignConfig
 from kintsugi.errors import KintsugiError
+from kintsugi.outputs import check_output_dir
 from kintsugi.trial import TrialRecord
 
 RESULTS = "results.jsonl"
@@ -38,18 +39,29 @@ class ResultStore:
         """The config recorded in campaign.json."""
         if not self.manifest_path.exists():
             raise KintsugiError(f"{self.manifest_path} not found; is {self.out_dir} a campaign out dir?")
-        data = json.loads(self.manifest_path.read_text())
-        return CampaignConfig.model_validate(data["config"])
+        try:
+            return CampaignConfig.model_validate(json.loads(self.manifest_path.read_text())["config"])
+        except (OSError, ValueError, KeyError, TypeError) as exc:  # ValidationError is a ValueError
+            raise KintsugiError(f"{self.manifest_path} is not a readable campaign manifest "
+                                f"({type(exc).__name__}: {str(exc).splitlines()[0]})") from None
 
     def ensure_manifest(self, cfg: CampaignConfig) -> None:
         """Write campaign.json on first start; on a later start, refuse a different config.
 
         Only `trials` (and `videos_per_cell`) may differ; the manifest is then updated.
+        An out dir that cannot be written is a KintsugiError, raised before any trial runs.
         """
+        check_output_dir(self.out_dir, "campaign directory")
+        try:
+            self._ensure_manifest(cfg)
+        except OSError as exc:
+            raise KintsugiError(f"cannot write campaign directory {self.out_dir}: {exc}") from None
+
+    def _ensure_manifest(self, cfg: CampaignConfig) -> None:
         self.out_dir.mkdir(parents=True, exist_ok=True)
         new = cfg.model_dump(mode="json")
         if self.manifest_path.exists():
-            old = json.loads(self.manifest_path.read_text())["config"]
+            old = self.load_config().model_dump(mode="json")
             diffs = [
                 k for k in sorted(set(old) | set(new))
                 if k not in RESUMABLE_FIELDS and old.get(k) != new.get(k)

@@ -119,7 +119,7 @@ def table_iii(records: Sequence[TrialRecord], cfg: CampaignConfig | None = None)
             continue
         skills = _ordered_skills([a for a, _ in counts] + [b for _, b in counts] + list(CONTACT_FORMATIONS))
         table = TextTable(
-            title=f"Table III — recovery transitions, {method} / {variant} (all conditions)",
+            title=f"Table III — recovery transitions, {method} / {variant} (pooled over conditions)",
             columns=["From \\ To", *[s.capitalize() for s in skills], "n"],
             notes=["Row: the skill that failed; column: the first skill of its recovery plan. "
                    "Row percentages with counts."],
