@@ -3,6 +3,11 @@
 Tests push `Script`s (JSON content, tool calls, HTTP errors, hangs) and then read
 `server.requests` to see exactly what the client sent. No test ever needs a real
 endpoint. Use it as a context manager or through the `fake_openai` fixture.
+
+Like several local servers, it can refuse the strict structured-output options:
+`refuse={"json_schema", "tool_choice"}` answers HTTP `refuse_status` (400) to a
+request with `response_format` json_schema or `tool_choice="required"`, without
+consuming a script (the refused request is still in `server.requests`).
 """
 
 from __future__ import annotations
@@ -14,7 +19,7 @@ import uuid
 from collections import deque
 from dataclasses import dataclass, field
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
-from typing import Any, Iterator
+from typing import Any, Iterable, Iterator
 
 import pytest
 
@@ -63,7 +68,13 @@ def hang(seconds: float) -> Script:
 class FakeOpenAIServer:
     """Threaded stdlib HTTP server on 127.0.0.1 with a random free port."""
 
-    def __init__(self) -> None:
+    def __init__(self, refuse: Iterable[str] = (), refuse_status: int = 400) -> None:
+        self.refuse = set(refuse)
+        unknown = self.refuse - REFUSALS.keys()
+        if unknown:
+            raise ValueError(f"cannot refuse {sorted(unknown)}; known: {sorted(REFUSALS)}")
+        self.refuse_status = refuse_status
+        self.refused = 0
         self.scripts: deque[Script] = deque()
         self.requests: list[dict[str, Any]] = []
         self.headers: list[dict[str, str]] = []
@@ -97,10 +108,15 @@ class FakeOpenAIServer:
     def __exit__(self, *exc: object) -> None:
         self.stop()
 
-    def _next(self, body: dict[str, Any], headers: dict[str, str]) -> Script | None:
+    def _next(self, body: dict[str, Any], headers: dict[str, str]) -> Script | str | None:
+        """The script for this request, or the message of a refusal of its strict options."""
         with self._lock:
             self.requests.append(body)
             self.headers.append(headers)
+            for option in sorted(self.refuse):
+                if REFUSALS[option][0](body):
+                    self.refused += 1
+                    return REFUSALS[option][1]
             return self.scripts.popleft() if self.scripts else None
 
     def _handler_class(self) -> type[BaseHTTPRequestHandler]:
@@ -138,6 +154,10 @@ class FakeOpenAIServer:
                     self._send(400, {"error": {"message": "body is not JSON", "type": "invalid_request_error"}})
                     return
                 script = server._next(body, {k.lower(): v for k, v in self.headers.items()})
+                if isinstance(script, str):
+                    self._send(server.refuse_status, {"error": {"message": script, "type": "invalid_request_error",
+                                                                "code": None}})
+                    return
                 if script is None:
                     # fail loudly and tell the SDK not to retry, so a missing script is obvious
                     self._send(500, {"error": {"message": "fake server: no scripted reply left", "type": "test"}},
@@ -158,6 +178,19 @@ class FakeOpenAIServer:
                 self._send(200, _completion(body, script))
 
         return Handler
+
+
+REFUSALS = {
+    "json_schema": (
+        lambda body: (body.get("response_format") or {}).get("type") == "json_schema",
+        "response_format type 'json_schema' is not supported by this server; use 'text' or 'json_object'",
+    ),
+    "tool_choice": (
+        lambda body: body.get("tool_choice") == "required",
+        "tool_choice 'required' is not supported; only 'auto' and 'none' are",
+    ),
+}
+"""What `refuse` can name: a test on the request body, and the error message (worded like local servers')."""
 
 
 def _completion(body: dict[str, Any], script: Script) -> dict[str, Any]:
