@@ -1,0 +1,305 @@
+"""Constraint and monitor templates as data (Appendix C-G), so a model's reply never runs code.
+
+Each template is a typed record with a `kind` and `evaluate(features) -> float`, where > 0
+means violated (Eq. 3 and Eq. 11). Units: metres and degrees. A template whose inputs are
+missing this step (object not perceived) reads NaN, which no monitor counts as a violation;
+the `visibility` template is the one that reports tracking loss.
+
+The same templates serve node constraints, path constraints and monitors (Eq. 14-19), plus
+relational `above`, `near` and `in_region` for sub-goals.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Annotated, Iterator, Literal, Union
+
+from pydantic import Field, StrictBool, model_validator
+
+from kintsugi.taskgraph.base import GraphModel, Name, NonNeg, Num, Vec3
+from kintsugi.taskgraph.features import Features
+
+Axes = Literal["xyz", "xy", "xz", "yz", "x", "y", "z"]
+_AXIS_INDEX = {"x": 0, "y": 1, "z": 2}
+NAN = math.nan
+
+RefRole = Literal["object", "arm", "point"]
+"""What a referenced entity must be: an object, an arm, or either (a point read from it)."""
+
+
+class Point(GraphModel):
+    """A 3-D point read from the features: an object's vector feature or an arm's end effector, plus a world offset."""
+
+    entity: Name
+    feature: Name | None = None
+    """Object: a 3-vector feature (default `centroid`). Arm: only `eef` (the default)."""
+    offset: Vec3 = (0.0, 0.0, 0.0)
+
+    def read(self, f: Features) -> tuple[float, float, float] | None:
+        arm = f.arms.get(self.entity)
+        if arm is not None:
+            v = arm.eef
+        else:
+            obj = f.objects.get(self.entity)
+            if obj is None:
+                return None
+            v = getattr(obj, self.feature or "centroid", None)
+            if v is None:
+                return None
+        ox, oy, oz = self.offset
+        return (float(v[0]) + ox, float(v[1]) + oy, float(v[2]) + oz)
+
+
+def _norm(d: tuple[float, float, float], axes: str) -> float:
+    if axes == "xyz":
+        return math.sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2])
+    return math.sqrt(sum(d[_AXIS_INDEX[a]] ** 2 for a in axes))
+
+
+def _tilt_deg(axis, gravity: Vec3) -> float:
+    """Angle between a sign-free principal axis and gravity, in [0, 90] degrees."""
+    ax, ay, az = float(axis[0]), float(axis[1]), float(axis[2])
+    gx, gy, gz = gravity
+    n = math.sqrt(ax * ax + ay * ay + az * az) * math.sqrt(gx * gx + gy * gy + gz * gz)
+    if not n > 0.0:
+        return NAN
+    return math.degrees(math.acos(min(1.0, abs(ax * gx + ay * gy + az * gz) / n)))
+
+
+class _Template(GraphModel):
+    """Common interface; subclasses set `kind` and implement `evaluate` and `refs`."""
+
+    def evaluate(self, f: Features) -> float:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def refs(self) -> Iterator[tuple[str, RefRole, str | None]]:  # pragma: no cover - abstract
+        """(entity, role, feature) for every name this template reads, for vocabulary checks."""
+        raise NotImplementedError
+
+    def bind(self, f: Features) -> "_Template":
+        """Fill references taken at edge start (see `drift`); others are returned unchanged."""
+        return self
+
+    @property
+    def bound(self) -> bool:
+        return True
+
+
+class Drift(_Template):
+    """Eq. 14, object pose drift: ||p - p_ref|| - tol. With `ref` unset, p_ref is latched at edge start."""
+
+    kind: Literal["drift"] = "drift"
+    point: Point
+    tol: NonNeg
+    ref: Vec3 | None = None
+    axes: Axes = "xyz"
+
+    def evaluate(self, f: Features) -> float:
+        p = self.point.read(f)
+        r = self.ref
+        if p is None or r is None:
+            return NAN
+        return _norm((p[0] - r[0], p[1] - r[1], p[2] - r[2]), self.axes) - self.tol
+
+    def bind(self, f: Features) -> "Drift":
+        if self.ref is not None:
+            return self
+        p = self.point.read(f)
+        return self if p is None else self.model_copy(update={"ref": p})
+
+    @property
+    def bound(self) -> bool:
+        return self.ref is not None
+
+    def refs(self):
+        yield (self.point.entity, "point", self.point.feature)
+
+
+class Upright(_Template):
+    """Eq. 15, uprightness: angle(principal axis, gravity) - tol (degrees; the axis has no sign)."""
+
+    kind: Literal["upright"] = "upright"
+    object: Name
+    tol_deg: Annotated[float, Field(strict=True, gt=0.0, le=90.0)]
+    gravity: Vec3 = (0.0, 0.0, -1.0)
+
+    def evaluate(self, f: Features) -> float:
+        obj = f.objects.get(self.object)
+        return NAN if obj is None else _tilt_deg(obj.axis, self.gravity) - self.tol_deg
+
+    def refs(self):
+        yield (self.object, "object", "axis")
+
+
+class Tilted(_Template):
+    """Tilted at least `min_deg` from gravity (e.g. a bottle pouring): min_deg - angle."""
+
+    kind: Literal["tilted"] = "tilted"
+    object: Name
+    min_deg: Annotated[float, Field(strict=True, gt=0.0, le=90.0)]
+    gravity: Vec3 = (0.0, 0.0, -1.0)
+
+    def evaluate(self, f: Features) -> float:
+        obj = f.objects.get(self.object)
+        return NAN if obj is None else self.min_deg - _tilt_deg(obj.axis, self.gravity)
+
+    def refs(self):
+        yield (self.object, "object", "axis")
+
+
+class NotGrasped(_Template):
+    """Eq. 16, not fully grasped: the fingers closed past `min_opening` (m), so nothing is between them."""
+
+    kind: Literal["not_grasped"] = "not_grasped"
+    arm: Name
+    min_opening: NonNeg
+
+    def evaluate(self, f: Features) -> float:
+        arm = f.arms.get(self.arm)
+        return NAN if arm is None else self.min_opening - float(arm.opening)
+
+    def refs(self):
+        yield (self.arm, "arm", "opening")
+
+
+class Detached(_Template):
+    """Eq. 17, slipped grasp: ||c_obj - p_eef|| - tol."""
+
+    kind: Literal["detached"] = "detached"
+    arm: Name
+    object: Name
+    tol: NonNeg
+
+    def evaluate(self, f: Features) -> float:
+        arm = f.arms.get(self.arm)
+        obj = f.objects.get(self.object)
+        if arm is None or obj is None:
+            return NAN
+        c, e = obj.centroid, arm.eef
+        d = (float(c[0]) - float(e[0]), float(c[1]) - float(e[1]), float(c[2]) - float(e[2]))
+        return _norm(d, "xyz") - self.tol
+
+    def refs(self):
+        yield (self.arm, "arm", "eef")
+        yield (self.object, "object", "centroid")
+
+
+class Visibility(_Template):
+    """Eq. 18, tracking loss: n_min - n_points (an object absent from the features has zero points)."""
+
+    kind: Literal["visibility"] = "visibility"
+    object: Name
+    n_min: Annotated[int, Field(strict=True, ge=1, le=10_000_000)]
+
+    def evaluate(self, f: Features) -> float:
+        obj = f.objects.get(self.object)
+        return float(self.n_min - (0 if obj is None else int(obj.n_points)))
+
+    def refs(self):
+        yield (self.object, "object", "n_points")
+
+
+class _Separation(_Template):
+    """||(a - b) restricted to `axes`|| - tol."""
+
+    a: Point
+    b: Point
+    tol: NonNeg
+
+    def evaluate(self, f: Features) -> float:
+        pa, pb = self.a.read(f), self.b.read(f)
+        if pa is None or pb is None:
+            return NAN
+        return _norm((pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]), self.axes) - self.tol
+
+    def refs(self):
+        yield (self.a.entity, "point", self.a.feature)
+        yield (self.b.entity, "point", self.b.feature)
+
+
+class Misaligned(_Separation):
+    """Eq. 19, relational misalignment: lateral (default xy) offset between two entities - tol."""
+
+    kind: Literal["misaligned"] = "misaligned"
+    axes: Axes = "xy"
+
+
+class Near(_Separation):
+    """`a` within `tol` of `b` (full 3-D distance by default)."""
+
+    kind: Literal["near"] = "near"
+    axes: Axes = "xyz"
+
+
+class Above(_Template):
+    """`a` at least `min_gap` above `b` along z: (b_z + min_gap) - a_z."""
+
+    kind: Literal["above"] = "above"
+    a: Point
+    b: Point
+    min_gap: Num = 0.0
+
+    def evaluate(self, f: Features) -> float:
+        pa, pb = self.a.read(f), self.b.read(f)
+        if pa is None or pb is None:
+            return NAN
+        return pb[2] + self.min_gap - pa[2]
+
+    def refs(self):
+        yield (self.a.entity, "point", self.a.feature)
+        yield (self.b.entity, "point", self.b.feature)
+
+
+class InRegion(_Template):
+    """Point inside the box [lo, hi]: the largest per-axis excursion outside it (negative inside)."""
+
+    kind: Literal["in_region"] = "in_region"
+    point: Point
+    lo: Vec3
+    hi: Vec3
+
+    @model_validator(mode="after")
+    def _ordered(self) -> "InRegion":
+        if any(l > h for l, h in zip(self.lo, self.hi)):
+            raise ValueError(f"region lo {self.lo} exceeds hi {self.hi} on some axis")
+        return self
+
+    def evaluate(self, f: Features) -> float:
+        p = self.point.read(f)
+        if p is None:
+            return NAN
+        lo, hi = self.lo, self.hi
+        return max(lo[0] - p[0], p[0] - hi[0], lo[1] - p[1], p[1] - hi[1], lo[2] - p[2], p[2] - hi[2])
+
+    def refs(self):
+        yield (self.point.entity, "point", self.point.feature)
+
+
+class Touching(_Template):
+    """The arm's fingers touch `object` (or, with expect=false, do not): -1 satisfied, +1 violated."""
+
+    kind: Literal["touching"] = "touching"
+    arm: Name
+    object: Name
+    expect: StrictBool = True
+
+    def evaluate(self, f: Features) -> float:
+        arm = f.arms.get(self.arm)
+        if arm is None:
+            return NAN
+        return -1.0 if (self.object in arm.touching) == self.expect else 1.0
+
+    def refs(self):
+        yield (self.arm, "arm", "touching")
+        yield (self.object, "object", None)
+
+
+TEMPLATES: tuple[type[_Template], ...] = (
+    Drift, Upright, Tilted, NotGrasped, Detached, Visibility, Misaligned, Near, Above, InRegion, Touching,
+)
+
+Constraint = Annotated[
+    Union[Drift, Upright, Tilted, NotGrasped, Detached, Visibility, Misaligned, Near, Above, InRegion, Touching],
+    Field(discriminator="kind"),
+]
+"""Any template, chosen by its `kind` field in JSON."""
