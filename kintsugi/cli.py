@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 import traceback
 from pathlib import Path
-from typing import Annotated, Optional
+from typing import Annotated, Literal, Optional
 
 import typer
 from rich.console import Console
@@ -26,6 +26,9 @@ ReasonerOpt = Annotated[str, typer.Option(help="reasoner backend: embedded (offl
 ModelOpt = Annotated[Optional[str], typer.Option(help="model name for the openai backend")]
 BaseUrlOpt = Annotated[Optional[str], typer.Option(help="OpenAI-compatible endpoint (vLLM, Ollama, llama.cpp)")]
 KeyEnvOpt = Annotated[str, typer.Option(help="environment variable holding the API key")]
+StructuredOpt = Annotated[Literal["auto", "strict", "text"], typer.Option(
+    help="openai reply format: strict (server-enforced JSON schema / tool calls), text (JSON asked for in the "
+         "prompt, parsed tolerantly), auto (strict until the server refuses it, then text)")]
 
 
 def _version(value: bool) -> None:
@@ -54,10 +57,12 @@ def _csv(text: str) -> list[str]:
     return [x.strip() for x in text.split(",") if x.strip()]
 
 
-def _reasoner(backend: str, model: str | None, base_url: str | None, key_env: str):  # noqa: ANN202
+def _reasoner(backend: str, model: str | None, base_url: str | None, key_env: str,  # noqa: ANN202
+              structured_output: str = "auto"):
     from kintsugi.trial import ReasonerSettings
 
-    return ReasonerSettings(backend=backend, model=model, base_url=base_url, api_key_env=key_env)
+    return ReasonerSettings(backend=backend, model=model, base_url=base_url, api_key_env=key_env,
+                            structured_output=structured_output)
 
 
 def _overrides(sets: list[str] | None) -> dict:
@@ -111,6 +116,7 @@ def run(
     model: ModelOpt = None,
     base_url: BaseUrlOpt = None,
     api_key_env: KeyEnvOpt = "OPENAI_API_KEY",
+    structured_output: StructuredOpt = "auto",
 ) -> None:
     """Run one trial, tell its story skill by skill, and save its record (and video).
 
@@ -126,7 +132,7 @@ def run(
     try:  # every name, setting and output path is checked before the trial spends anything
         cfg = build_config(task=task, methods=[method], variants=[shape], conditions=[condition], trials=1,
                            base_seed=seed, overrides=_overrides(set_),
-                           reasoner=_reasoner(reasoner, model, base_url, api_key_env))
+                           reasoner=_reasoner(reasoner, model, base_url, api_key_env, structured_output))
         spec = expand(cfg)[0].model_copy(update={"video": str(check_video_path(video)) if video else None})
         path = check_output_file(record or _record_path(spec), "record", (".json",))
     except KintsugiError as exc:
@@ -173,6 +179,7 @@ def bench(
     model: ModelOpt = None,
     base_url: BaseUrlOpt = None,
     api_key_env: KeyEnvOpt = "OPENAI_API_KEY",
+    structured_output: StructuredOpt = "auto",
 ) -> None:
     """Run (or resume) a campaign; print the paper's tables and write report.md / report.html.
 
@@ -188,7 +195,8 @@ def bench(
         cfg = build_config(
             task=task, methods=_csv(methods), variants=_csv(shapes), conditions=_csv(conditions), trials=trials,
             base_seed=base_seed, overrides=_overrides(set_), plugins=plugin or [],
-            reasoner=_reasoner(reasoner, model, base_url, api_key_env), videos_per_cell=videos_per_cell)
+            reasoner=_reasoner(reasoner, model, base_url, api_key_env, structured_output),
+            videos_per_cell=videos_per_cell)
         records = run_campaign(cfg, out, workers=workers, executor=executor)
         print_tables(all_tables(records, cfg), console)
         md, html = write_report(out, cfg, records)

@@ -190,3 +190,37 @@ def test_bad_mode_is_a_config_error(fake_openai: FakeOpenAIServer) -> None:
 
 
 from tests.fake_openai_server import fake_openai  # noqa: E402,F401  (fixture)
+
+
+def test_cli_structured_output_option_reaches_the_backend_and_the_record(tmp_path) -> None:  # noqa: ANN001
+    from typer.testing import CliRunner
+
+    from kintsugi.cli import app
+    from kintsugi.trial import TrialRecord
+
+    analysis = {"what_happened": "fit judged failed", "why": "scripted", "how_to_recover": "retry fit",
+                "restart_from": "fit", "motions": [{"skill": "fit", "axis": "y", "delta": 0.0}]}
+    plan = {"steps": [{"skill": "fit", "goal": {"y": 1.5}}, {"skill": "align", "goal": {"y": -1.0}},
+                      {"skill": "insert", "goal": {"z": 115.0}}]}
+    args = ["run", "peg-insertion", "--method", "recovery", "--shape", "square", "--reasoner", "openai",
+            "--model", "scripted"]
+    with FakeOpenAIServer(refuse={"json_schema", "tool_choice"}) as server:
+        server.push(content({"success": False, "explanation": "tip not in the hole"}), content(analysis),
+                    content(f"Here is the plan:\n```json\n{json.dumps(plan)}\n```"),
+                    *[content({"success": True, "explanation": f"{s} ok"}) for s in ("fit", "align", "insert")])
+        out = tmp_path / "auto.json"
+        result = CliRunner().invoke(app, [*args, "--base-url", server.base_url, "--record", str(out)])
+        assert result.exit_code == 0, result.output
+        rec = TrialRecord.model_validate_json(out.read_text())
+        assert rec.success and [c["output_mode"] for c in rec.transcript] == ["text"] * 6
+        assert server.refused == 2 and [bool(c["output_note"]) for c in rec.transcript] == [1, 0, 1, 0, 0, 0]
+
+    with FakeOpenAIServer(refuse={"json_schema"}) as server:
+        out = tmp_path / "strict.json"
+        result = CliRunner().invoke(app, [*args, "--base-url", server.base_url, "--record", str(out),
+                                          "--structured-output", "strict"])
+        assert result.exit_code == 1 and "--structured-output" in out.read_text()
+        assert len(server.requests) == 1
+
+    result = CliRunner().invoke(app, [*args, "--structured-output", "json"])
+    assert result.exit_code == 2 and "json" in result.output
