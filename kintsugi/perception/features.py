@@ -1,0 +1,205 @@
+"""Object features a method may see: centroid, principal axis, extremal points, uprightness.
+
+Task-free and perceived only: a cloud fused from segmentation + depth renders
+(`object_cloud`), plus the object's known shape from the catalogue
+(`Primitive`). Everything is in metres, in the world frame. When the shape
+fixes the pose, the features come from the fitted primitive (`fit="primitive"`);
+otherwise, or when that fit fails, from the raw cloud (`fit="raw"`, with a note).
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+import numpy as np
+from pydantic import Field
+
+from kintsugi.config import StrictModel
+from kintsugi.errors import ConfigError
+from kintsugi.perception.cloud import CameraModel, View, body_geom_ids, object_cloud, object_clouds, render_view
+from kintsugi.perception.primitives import Fit, FitSettings, Primitive, box_starts, fit_box, fit_cylinder, fit_sphere
+
+__all__ = [
+    "CameraModel",
+    "FeatureConfig",
+    "ObjectFeatures",
+    "Primitive",
+    "View",
+    "body_geom_ids",
+    "features",
+    "object_cloud",
+    "object_clouds",
+    "render_view",
+]
+
+Vec3 = tuple[float, float, float]
+UP = np.array([0.0, 0.0, 1.0])
+LEVEL = float(np.sin(np.radians(2.0)))  # axes closer than this to horizontal are signed by x, not z
+
+
+class FeatureConfig(StrictModel):
+    """Thresholds of the feature extractor."""
+
+    min_points: int = Field(10, ge=3)  # fewer points: the object counts as not visible
+    min_fit_points: int = Field(30, ge=3)  # fewer points: no primitive fit, raw features
+    fit_points: int = Field(400, ge=10)  # the fit uses at most this many (evenly spaced) points
+    min_inliers: float = Field(0.7, gt=0.0, le=1.0)  # a fit must put this share of points on its surface
+    inlier_tol: float = Field(0.003, gt=0.0)  # metres from the surface that count as on it
+    max_shift: float = Field(0.02, gt=0.0)  # a fit may move the centre this much beyond the primitive's half size
+    band: float = Field(0.005, gt=0.0)  # raw extremes: centre of the points within this of the extreme
+    upright_tol_deg: float = Field(15.0, gt=0.0, lt=90.0)  # upright: axis within this of vertical
+    min_elongation: float = Field(1.3, ge=1.0)  # raw/box axis is defined when spread ratio >= this
+
+
+class ObjectFeatures(StrictModel):
+    """What a method may know about one object, from its perceived cloud (metres, world frame).
+
+    `axis` is the principal axis, unit, sign-normalised so that z >= 0 (horizontal: x >= 0).
+    `extremes`: `top` / `bottom` (centre of the highest / lowest face, edge or point) and
+    `axis_pos` / `axis_neg` (the two ends along `axis`). Fields other than name, visible,
+    n_points, fit and note are None when the object is not visible.
+    """
+
+    name: str
+    visible: bool
+    n_points: int
+    fit: Literal["primitive", "raw"]
+    fit_rms: float | None = None  # RMS distance of inlier points to the fitted surface
+    fit_inliers: float | None = None  # share of points on the fitted surface
+    note: str = ""  # why the features are raw, or why not visible
+    centroid: Vec3 | None = None
+    raw_centroid: Vec3 | None = None  # mean of the visible points (biased towards the cameras)
+    axis: Vec3 | None = None
+    extent: Vec3 | None = None  # cloud size along the axis and the two other principal directions
+    tilt_deg: float | None = None  # angle between axis and vertical, 0..90
+    upright: bool | None = None  # None when the object has no well-defined axis
+    extremes: dict[str, Vec3] = Field(default_factory=dict)
+
+
+def _vec(v: np.ndarray) -> Vec3:
+    return (float(v[0]), float(v[1]), float(v[2]))
+
+
+def sign_normalized(a: np.ndarray) -> np.ndarray:
+    """Unit axis pointing up; within 2 deg of horizontal, pointing to +x (then +y)."""
+    a = np.asarray(a, float) / np.linalg.norm(a)
+    for k, tol in ((2, LEVEL), (0, LEVEL), (1, 0.0)):
+        if abs(a[k]) > tol:
+            return a if a[k] > 0 else -a
+    return a
+
+
+def _principal(p: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Principal directions (columns, by decreasing spread) and their variances."""
+    q = p - p.mean(axis=0)
+    w, v = np.linalg.eigh(q.T @ q / len(p))
+    return v[:, ::-1], np.maximum(w[::-1], 0.0)
+
+
+def _band_extreme(p: np.ndarray, d: np.ndarray, band: float) -> np.ndarray:
+    """Centre of the points within `band` of the extreme along d, moved onto the extreme plane."""
+    t = p @ d
+    mean = p[t >= t.max() - band].mean(axis=0)
+    return mean + (t.max() - mean @ d) * d
+
+
+def _fit(p: np.ndarray, primitive: Primitive, axes: np.ndarray, cfg: FeatureConfig) -> Fit | None:
+    s = FitSettings(inlier_tol=cfg.inlier_tol)
+    if len(p) > cfg.fit_points:
+        p = p[np.linspace(0, len(p) - 1, cfg.fit_points).round().astype(np.int64)]
+    if primitive.kind == "cylinder":
+        starts: list[np.ndarray] = []
+        for a in (axes[:, 0], UP, axes[:, 1], axes[:, 2]):
+            if all(abs(a @ b) < 0.95 for b in starts):
+                starts.append(a)
+        return fit_cylinder(p, float(primitive.radius), primitive.half_length, starts, s)
+    if primitive.kind == "box":
+        he = np.asarray(primitive.half_extents, float)
+        return fit_box(p, he, box_starts(axes, p, he), s)
+    return fit_sphere(p, float(primitive.radius), s)
+
+
+def _box_axis_defined(size: np.ndarray, min_elongation: float) -> bool:
+    a, b = np.sort(size)[::-1][:2]
+    return a >= min_elongation * b
+
+
+def features(
+    name: str, cloud: np.ndarray, primitive: Primitive | None = None, config: FeatureConfig | None = None
+) -> ObjectFeatures:
+    """Features of one object's fused cloud; fits `primitive` when it is known."""
+    cfg = config or FeatureConfig()
+    p = np.asarray(cloud, dtype=np.float64)
+    if p.ndim != 2 or p.shape[1] != 3:
+        raise ConfigError(f"cloud of {name!r} must have shape (N, 3), got {p.shape}")
+    p = p[np.isfinite(p).all(axis=1)]
+    n = len(p)
+    if n < cfg.min_points:
+        return ObjectFeatures(name=name, visible=False, n_points=n, fit="raw", note=f"{n} points < {cfg.min_points}")
+
+    raw_centroid = p.mean(axis=0)
+    axes, var = _principal(p)
+    raw_axis = sign_normalized(axes[:, 0])
+    elongated = var[0] >= cfg.min_elongation**2 * var[1]
+
+    fit: Fit | None = None
+    note = ""
+    kind = primitive.kind if primitive is not None else "none"
+    if kind == "none":
+        note = "no known shape"
+    elif n < cfg.min_fit_points:
+        note = f"{n} points < {cfg.min_fit_points} for a {kind} fit"
+    else:
+        fit = _fit(p, primitive, axes, cfg)  # type: ignore[arg-type]
+        if fit is None:
+            note = f"{kind} fit did not converge"
+        elif fit.inliers < cfg.min_inliers:
+            note = f"{kind} fit put only {fit.inliers:.0%} of points on its surface"
+            fit = None
+        elif (shift := float(np.linalg.norm(fit.centre - raw_centroid))) > fit.bound_radius + cfg.max_shift:
+            note = f"{kind} fit moved the centre {shift * 1000:.0f} mm from the points"
+            fit = None
+
+    if fit is not None:
+        centroid = fit.centre
+        fit_axis = fit.axis
+        if fit_axis is None:  # sphere
+            axis, has_axis = UP, False
+        else:
+            axis = sign_normalized(fit_axis)
+            has_axis = fit.kind == "cylinder" or _box_axis_defined(fit.size, cfg.min_elongation)
+        h = fit.half_length
+        extremes = {
+            "top": fit.support(UP),
+            "bottom": fit.support(-UP),
+            "axis_pos": centroid + h * axis if fit_axis is not None else fit.support(axis),
+            "axis_neg": centroid - h * axis if fit_axis is not None else fit.support(-axis),
+        }
+    else:
+        centroid, axis, has_axis = raw_centroid, raw_axis, bool(elongated)
+        extremes = {
+            "top": _band_extreme(p, UP, cfg.band),
+            "bottom": _band_extreme(p, -UP, cfg.band),
+            "axis_pos": _band_extreme(p, axis, cfg.band),
+            "axis_neg": _band_extreme(p, -axis, cfg.band),
+        }
+
+    others = np.linalg.svd(np.eye(3) - np.outer(axis, axis))[0][:, :2]  # two unit directions across the axis
+    spans = [float(np.ptp(p @ d)) for d in (axis, others[:, 0], others[:, 1])]
+    tilt = float(np.degrees(np.arccos(np.clip(axis[2], -1.0, 1.0))))
+    return ObjectFeatures(
+        name=name,
+        visible=True,
+        n_points=n,
+        fit="primitive" if fit is not None else "raw",
+        fit_rms=fit.rms if fit is not None else None,
+        fit_inliers=fit.inliers if fit is not None else None,
+        note=note,
+        centroid=_vec(centroid),
+        raw_centroid=_vec(raw_centroid),
+        axis=_vec(axis),
+        extent=(spans[0], *sorted(spans[1:], reverse=True)),
+        tilt_deg=tilt if has_axis else None,
+        upright=(tilt <= cfg.upright_tol_deg) if has_axis else None,
+        extremes={k: _vec(v) for k, v in extremes.items()},
+    )
