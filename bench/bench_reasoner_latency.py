@@ -1,6 +1,8 @@
 """Latency of the openai reasoner per role: client overhead (fake local server) or a real endpoint.
 
     .venv/bin/python bench/bench_reasoner_latency.py               # fake server, client-side cost only
+    .venv/bin/python bench/bench_reasoner_latency.py --structured-output text      # text-mode parsing cost
+    .venv/bin/python bench/bench_reasoner_latency.py --refuse-strict  # fake server refuses strict options (auto)
     .venv/bin/python bench/bench_reasoner_latency.py --base-url http://localhost:8000/v1 --model Qwen2.5-VL-7B
 
 Images are 640x480 PNGs like the task camera's, so the numbers include PNG
@@ -10,6 +12,9 @@ base64 encoding and request size; with a real endpoint they include the model.
 from __future__ import annotations
 
 import argparse
+import json
+import os
+import platform
 import statistics
 import sys
 import time
@@ -76,20 +81,28 @@ def main() -> None:
     parser.add_argument("--model", default="fake-vlm")
     parser.add_argument("--api-key-env", default="OPENAI_API_KEY")
     parser.add_argument("-n", type=int, default=20, help="calls per role")
+    parser.add_argument("--structured-output", choices=("auto", "strict", "text"), default="auto")
+    parser.add_argument("--refuse-strict", action="store_true",
+                        help="fake server answers HTTP 400 to json_schema and tool_choice=required, like some local servers")
     args = parser.parse_args()
 
     server = None
     base_url = args.base_url
     if base_url is None:
-        server = FakeOpenAIServer().start()
+        server = FakeOpenAIServer(refuse={"json_schema", "tool_choice"} if args.refuse_strict else ()).start()
         base_url = server.base_url
         analysis = AnalyzeReply(what_happened="-", why="-", how_to_recover="-", restart_from="align")
+        steps = [{"skill": "align", "goal": {"y": 14.0}}, {"skill": "insert", "goal": {"z": -20.0}}]
+        text_plans = args.refuse_strict or args.structured_output == "text"
         for _ in range(args.n):
             server.push(content({"success": False, "explanation": "left of hole"}),
                         content(analysis.model_dump(mode="json")),
-                        tool_calls(("align", {"y": 14.0}), ("insert", {"z": -20.0})))
+                        # text mode: a plan the way small models write it, in a fence with prose around it
+                        content("Plan:\n```json\n" + json.dumps({"steps": steps}, indent=2) + "\n```\nDone.")
+                        if text_plans else tool_calls(("align", {"y": 14.0}), ("insert", {"z": -20.0})))
     reasoner = RecordingReasoner(OpenAIReasoner(model=args.model, base_url=base_url, api_key_env=args.api_key_env,
-                                                timeout_s=120, max_retries=2))
+                                                timeout_s=120, max_retries=2,
+                                                structured_output=args.structured_output))
     try:
         for i in range(args.n):
             judge, analyze, plan = requests(i)
@@ -99,17 +112,25 @@ def main() -> None:
     finally:
         if server is not None:
             server.stop()
-    print(f"endpoint: {base_url}  model: {args.model}  calls per role: {args.n}")
+    print(f"endpoint: {base_url}  model: {args.model}  calls per role: {args.n}  "
+          f"structured output: {args.structured_output}{' (server refuses strict)' if args.refuse_strict else ''}")
+    print(f"machine: {platform.system()} {platform.machine()}, {os.cpu_count()} CPUs, Python {platform.python_version()}")
     if server is not None:
         sizes = [len(str(r)) for r in server.requests]
-        print(f"request body chars: median {statistics.median(sizes):.0f}")
-    print(f"{'role':8} {'median ms':>10} {'p95 ms':>8} {'tokens in':>10} {'tokens out':>10} {'attempts':>9}")
+        print(f"request body chars: median {statistics.median(sizes):.0f}; refused requests: {server.refused}")
+    for r in reasoner.records:
+        if r.output_note:
+            print(f"{r.role}: {r.output_note}")
+    print(f"{'role':8} {'median ms':>10} {'p95 ms':>8} {'max ms':>8} {'tokens in':>10} {'tokens out':>10} "
+          f"{'attempts':>9} {'mode':>6}")
     for role in ("judge", "analyze", "plan"):
         recs = [r for r in reasoner.records if r.role == role]
         lat = sorted(r.latency_s * 1000 for r in recs)
         p95 = lat[min(len(lat) - 1, int(0.95 * len(lat)))]
-        print(f"{role:8} {statistics.median(lat):10.1f} {p95:8.1f} {sum(r.tokens_in for r in recs) / len(recs):10.0f}"
-              f" {sum(r.tokens_out for r in recs) / len(recs):10.0f} {sum(r.attempts for r in recs) / len(recs):9.2f}")
+        modes = "/".join(sorted({r.output_mode or "-" for r in recs}))
+        print(f"{role:8} {statistics.median(lat):10.1f} {p95:8.1f} {lat[-1]:8.1f} "
+              f"{sum(r.tokens_in for r in recs) / len(recs):10.0f} {sum(r.tokens_out for r in recs) / len(recs):10.0f} "
+              f"{sum(r.attempts for r in recs) / len(recs):9.2f} {modes:>6}")
 
 
 if __name__ == "__main__":

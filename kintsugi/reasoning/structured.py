@@ -280,7 +280,7 @@ class StructuredClient:
 
 
 def _shorten(text: str, limit: int = 300) -> str:
-    text = " ".join(str(text).split())
+    text = re.sub(r"^Error code: \d+ - ", "", " ".join(str(text).split()))
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
