@@ -228,19 +228,95 @@ def test_hole_offset_moves_the_hole_and_ground_truth_follows(shape: str) -> None
     assert truth.tip_offset_mm == pytest.approx(-hole_y, abs=1.0)
 
 
-def test_ground_truth_needs_the_tip_inside_the_opening() -> None:
-    """Scoring: deep but outside the opening (e.g. a tip pushed below z=0 off the hole) is no success."""
-    world = _world("round")
-    hole = world.hole
+def _place(world: PegWorld, y: float, z: float, roll_deg: float = 0.0, x: float = 0.0) -> None:
+    """Put the peg tip kinematically at (x, y, z) (rigid wrist) with the base rolled by roll_deg."""
     mocap = world.model.body_mocapid[_body(world, "base")]
-    for y, z, inside in ((0.0, -0.02, True), (hole.y_range[1] * 0.9, -0.02, True), (hole.y_range[1] + 0.002, -0.02, False),
-                         (0.0, 0.005, False)):
-        world.data.mocap_pos[mocap] = (0.0, y, z + GRASP_TO_TIP)
-        world.data.qpos[:] = 0.0
-        mujoco.mj_kinematics(world.model, world.data)
+    roll = math.radians(roll_deg)
+    world.data.mocap_quat[mocap] = (math.cos(roll / 2), math.sin(roll / 2), 0, 0)
+    world.data.qpos[:] = 0.0
+    world.data.mocap_pos[mocap] = (0.0, 0.0, 0.0)
+    mujoco.mj_kinematics(world.model, world.data)
+    tip = world.data.site_xpos[mujoco.mj_name2id(world.model, mujoco.mjtObj.mjOBJ_SITE, "peg_tip")].copy()
+    world.data.mocap_pos[mocap] = (x - tip[0], y - tip[1], z - tip[2])
+    mujoco.mj_kinematics(world.model, world.data)
+
+
+def test_ground_truth_needs_depth_inside_the_footprint_and_an_upright_peg() -> None:
+    """Scoring (kinematic poses): the tip >= half the hole depth (20 mm) below the top, inside the
+    opening's footprint along x and y, and the axis within atan(clearance / 20 mm) = 5.71 deg."""
+    world = _world("round", hole_x_mm=3.0)
+    hole = world.hole
+    edge = hole.y_range[1]
+    bound = math.degrees(math.atan2(CFG.peg.clearance_mm, 20.0))
+    cases = [  # (y, z, roll, x, inside, success)
+        (0.0, -0.0205, 0.0, 0.003, True, True),
+        (0.0, -0.0195, 0.0, 0.003, True, False),  # 19.5 mm: inside, too shallow (old G passed >= 10 mm)
+        (0.0, -0.012, 0.0, 0.003, True, False),
+        (edge * 0.9, -0.025, 0.0, 0.003, True, True),
+        (edge + 0.002, -0.025, 0.0, 0.003, False, False),  # beyond the opening along y
+        (0.0, -0.025, 0.0, 0.003 + edge + 0.002, False, False),  # beyond it along x (hole moved to x = 3 mm)
+        (0.0, -0.025, 0.0, 0.0, True, True),  # 3 mm off along x is still inside
+        (0.0, 0.005, 0.0, 0.003, False, False),
+        (0.0, -0.025, bound - 0.1, 0.003, True, True),
+        (0.0, -0.025, bound + 0.1, 0.003, True, False),  # wedged: tilted past the rigid bound
+        (0.0, -0.025, -(bound + 0.1), 0.003, True, False),
+    ]
+    for y, z, roll, x, inside, success in cases:
+        _place(world, y, z, roll, x)
         truth = world.ground_truth()
-        assert truth.inside_hole is inside and truth.success is inside, (y, z, truth)
+        assert (truth.inside_hole, truth.success) == (inside, success), (y, z, roll, x, truth)
         assert truth.tip_depth_mm == pytest.approx(-z / MM, abs=1e-6)
+        assert truth.tilt_deg == pytest.approx(abs(roll), abs=1e-6)
+        assert truth.tip_offset_x_mm == pytest.approx((x - 0.003) / MM, abs=1e-6)
+        assert truth.max_tilt_deg == pytest.approx(bound, abs=1e-6)
+
+
+def test_tilt_bound_follows_the_lean_direction_and_the_config() -> None:
+    """A square leaning along its diagonal has sqrt(2) x the clearance; a configured bound wins."""
+    world = _world("square")
+    flats = math.degrees(math.atan2(2.0, 20.0))
+    assert world.max_tilt_deg((0.0, 1.0)) == pytest.approx(flats, abs=1e-6)
+    assert world.max_tilt_deg((1.0, 0.0)) == pytest.approx(flats, abs=1e-6)
+    diagonal = (math.sqrt(0.5), math.sqrt(0.5))
+    assert world.max_tilt_deg(diagonal) == pytest.approx(math.degrees(math.atan2(2.0 * math.sqrt(2), 20.0)), abs=1e-3)
+    from kintsugi.config import apply_overrides
+
+    cfg = apply_overrides(CFG, ["scoring.max_tilt_deg=3", "scoring.min_depth_fraction=0.75"])
+    world = PegWorld(cfg, TrialParams(shape="square"))
+    assert world.max_tilt_deg(diagonal) == 3.0
+    _place(world, 0.0, -0.029, 2.0)
+    assert not world.ground_truth().success  # 29 mm < 0.75 x 40 mm
+    _place(world, 0.0, -0.031, 2.0)
+    assert world.ground_truth().success
+    _place(world, 0.0, -0.031, 3.5)
+    assert not world.ground_truth().success
+
+
+def _run_taught(world: PegWorld) -> None:
+    from kintsugi.tasks.peg.goals import full_goals, load_goals
+    from kintsugi.tasks.peg.skills import SEQUENCE
+    from kintsugi.tasks.peg.world import HOME_POSE
+
+    targets = full_goals(load_goals(), HOME_POSE)
+    for skill in SEQUENCE:
+        execute_skill(world, skill, targets[skill])
+
+
+@pytest.mark.parametrize(("shape", "hole_y", "angle", "shallow"), [
+    ("square", 17.72, 0.11, True),  # condition pose, seed 4: jammed 16.9 mm deep at 8.7 deg
+    ("round", -18.0, 0.06, False),  # condition pose, seed 29: 20.5 mm deep but wedged at 7.4 deg
+])
+def test_jammed_tilted_peg_is_not_a_success(shape: str, hole_y: float, angle: float, shallow: bool) -> None:
+    """The taught goals against a displaced hole wedge the peg between the rim and the far wall.
+    The baseline's own verdict is success and the old G (tip >= 10 mm in the hole) said so too."""
+    world = _world(shape, hole_y_mm=hole_y, grasp_angle_deg=angle)
+    _run_taught(world)
+    truth = world.ground_truth()
+    assert truth.inside_hole and truth.tip_depth_mm >= 10.0  # what the old G accepted
+    assert truth.tilt_deg > truth.max_tilt_deg + 1.0
+    assert (truth.tip_depth_mm < truth.min_depth_mm) is shallow
+    assert not truth.success
+    _no_warnings(world)
 
 
 # --- conditions ----------------------------------------------------------
@@ -279,8 +355,13 @@ def test_friction_range_override_reaches_the_model() -> None:
 
 @pytest.mark.parametrize("shape", SHAPES)
 def test_baseline_inserts_every_shape_in_the_default_condition(shape: str) -> None:
+    """The taught goals in the default condition: a G success, deep, centred and upright, each with
+    margin (so the taught goals are not marginal under G)."""
     record = run_trial(TrialSpec(task="peg-insertion", method="baseline", variant=shape, condition="none", seed=0))
     assert record.error is None, record.error
     assert record.success, record.params
-    assert record.params["tip_depth_mm"] >= 10.0
+    p = record.params
+    assert p["tip_depth_mm"] >= 20.0 + 3.0  # G needs half the 40 mm hole
+    assert p["tilt_deg"] < math.degrees(math.atan2(CFG.peg.clearance_mm, 20.0)) / 3
+    assert abs(p["tip_offset_mm"]) < 2.0 and abs(p["tip_offset_x_mm"]) < 0.5
     assert record.framework_success

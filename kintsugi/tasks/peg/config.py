@@ -8,10 +8,14 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field
+from pydantic import Field, field_validator
 
 from kintsugi.config import Range, StrictModel
 from kintsugi.perception.segment import PerceptionConfig
+
+
+RECOVERY_SKILL_NAMES = ("approach", "contact", "fit", "align", "insert")
+"""The contact-formation skills CF0..CF4, by name, in order (kept in step with skills.SKILLS)."""
 
 
 class PegSection(StrictModel):
@@ -36,6 +40,9 @@ class HoleSection(StrictModel):
     """Applied by the `friction` and `all` conditions."""
     y_offset_mm: Range = (-20.0, 20.0)
     """Hole position error along y; applied by the `pose` and `all` conditions."""
+    x_offset_mm: Range = (0.0, 0.0)
+    """Hole position error along x, out of the main camera's plane (off by default, as in the
+    paper); applied by the `pose` and `all` conditions."""
 
 
 class GraspSection(StrictModel):
@@ -82,6 +89,11 @@ class CameraSection(StrictModel):
     view_height_mm: float = Field(150.0, gt=10)
     center_y_mm: float = -10.0
     center_z_mm: float = 30.0
+    side_view: bool = False
+    """Add a second orthographic camera viewing the x-z plane (from -y), same size and scale,
+    with the hole's section painted on the board's side face; off as in the paper."""
+    center_x_mm: float = 0.0
+    """Horizontal image centre of the side view (its image right is +x)."""
 
 
 class SimSection(StrictModel):
@@ -100,6 +112,34 @@ class RecoverySection(StrictModel):
     """Largest change of one goal per recovery (the paper's real-robot failure was an over-large update)."""
     workspace_y_mm: Range = (-120.0, 120.0)
     workspace_z_mm: Range = (100.0, 200.0)
+    skills: tuple[str, ...] = ("fit", "align", "insert")
+    """Skills a recovery plan may use. The paper's are CF2..CF4; adding `approach` and `contact`
+    lets a plan back out of the hole and re-approach (with a corrected roll)."""
+
+    @field_validator("skills")
+    @classmethod
+    def _known_skills(cls, v: tuple[str, ...]) -> tuple[str, ...]:
+        unknown = [s for s in v if s not in RECOVERY_SKILL_NAMES]
+        if unknown:
+            raise ValueError(f"unknown recovery skill {unknown[0]!r}; allowed: {', '.join(RECOVERY_SKILL_NAMES)}")
+        if not v:
+            raise ValueError(f"needs at least one skill of {', '.join(RECOVERY_SKILL_NAMES)}")
+        dupes = sorted({s for s in v if v.count(s) > 1})
+        if dupes:
+            raise ValueError(f"lists {', '.join(dupes)} more than once")
+        return tuple(s for s in RECOVERY_SKILL_NAMES if s in v)  # contact-formation order
+
+
+class ScoringSection(StrictModel):
+    """Ground truth G (scoring only; no method reads the world's truth)."""
+
+    min_depth_fraction: float = Field(0.5, gt=0, le=1)
+    """The peg tip must be at least this fraction of the hole depth below the board top,
+    inside the opening's footprint."""
+    max_tilt_deg: float | None = Field(None, gt=0, lt=90)
+    """Largest tilt of the peg axis from vertical. None: the largest tilt a rigid peg seated at
+    the minimum depth can have, atan(gap / depth), the gap being the hole's width minus the
+    peg's in the direction it leans (5.7 deg across flats with the default 2 mm clearance)."""
 
 
 class PegTaskConfig(StrictModel):
@@ -112,6 +152,7 @@ class PegTaskConfig(StrictModel):
     sim: SimSection = SimSection()
     recovery: RecoverySection = RecoverySection()
     perception: PerceptionConfig = PerceptionConfig()
+    scoring: ScoringSection = ScoringSection()
 
 
 Condition = Literal["none", "friction", "pose", "all"]

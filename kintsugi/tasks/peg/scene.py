@@ -2,7 +2,9 @@
 
 Layout (metres): the board's top surface is the plane z = 0 and the nominal
 hole axis is at y = 0; the camera looks along -x at the y-z task plane, so
-image right is +y and image up is +z. The wrist base is a mocap body (an
+image right is +y and image up is +z. The optional side camera looks along +y
+at the x-z plane (image right +x); each camera sees the hole's section painted
+red on the board face in front of it, and hides the other's paint (geom group). The wrist base is a mocap body (an
 ideal position-controlled arm); four spring joints (z slide, roll, pitch,
 yaw) connect it to the gripper, which holds the peg rigidly.
 """
@@ -48,12 +50,14 @@ def _board_geoms(hole: HoleShape, cfg: PegTaskConfig) -> list[str]:
     # Hole walls: one box per half-plane, inner face on the hole's side.
     n = len(hole.sides)
     front = BOARD_HALF_X  # the rim must be painted in front of every wall box
+    side = -BOARD_HALF_Y  # likewise the side view's rim, on the -y face
     for k, (angle, inset) in enumerate(hole.sides):
         ny, nx = math.cos(angle), math.sin(angle)
         d = inset + WALL_THICK / 2
         # Long enough to close the ring between neighbours, short enough to stay inside the board.
         half_len = min(WALL_HALF_LEN, (inset + WALL_THICK) * math.tan(math.pi / n) + 0.005)
         front = max(front, nx * d + half_len * abs(ny) + WALL_THICK / 2 * abs(nx))
+        side = min(side, ny * d - half_len * abs(nx) - WALL_THICK / 2 * abs(ny))
         geoms.append(
             f'<geom name="wall{k}" type="box" size="{_f(half_len, WALL_THICK / 2, hz)}" '
             f'pos="{_f(nx * d, ny * d, cz)}" euler="0 0 {-angle:.6g}" {common}/>'
@@ -67,6 +71,12 @@ def _board_geoms(hole: HoleShape, cfg: PegTaskConfig) -> list[str]:
         f'<geom name="hole_rim" type="box" size="{_f(0.0005, (y1 - y0) / 2, hz)}" '
         f'pos="{_f(front + 0.001, (y0 + y1) / 2, cz)}" rgba="{HOLE_RGBA}" contype="0" conaffinity="0" group="1"/>'
     )
+    if cfg.camera.side_view:
+        x0, x1 = hole.x_range
+        geoms.append(
+            f'<geom name="hole_rim_side" type="box" size="{_f((x1 - x0) / 2, 0.0005, hz)}" '
+            f'pos="{_f((x0 + x1) / 2, side - 0.001, cz)}" rgba="{HOLE_RGBA}" contype="0" conaffinity="0" group="2"/>'
+        )
     return geoms
 
 
@@ -93,6 +103,11 @@ def build_mjcf(peg: PegShape, hole: HoleShape, cfg: PegTaskConfig) -> str:
     finger_h = cfg.grasp.depth_mm * MM / 2 + 0.005
     finger_y = peg.half_y + 0.006
     board = "\n      ".join(_board_geoms(hole, cfg))
+    side_camera = (
+        f'<camera name="side" mode="fixed" pos="{_f(cam.center_x_mm * MM, -0.6, cam.center_z_mm * MM)}" '
+        f'xyaxes="1 0 0 0 0 1" projection="orthographic" fovy="{cam.view_height_mm * MM:.6g}"/>'
+        if cam.side_view else ""
+    )
     return f"""
 <mujoco model="peg_insertion">
   <compiler angle="radian" autolimits="true"/>
@@ -113,6 +128,7 @@ def build_mjcf(peg: PegShape, hole: HoleShape, cfg: PegTaskConfig) -> str:
   <worldbody>
     <camera name="scene" mode="fixed" pos="{_f(0.6, cam.center_y_mm * MM, cam.center_z_mm * MM)}"
             xyaxes="0 1 0 0 0 1" projection="orthographic" fovy="{cam.view_height_mm * MM:.6g}"/>
+    {side_camera}
     <body name="board" pos="0 0 0">
       {board}
     </body>

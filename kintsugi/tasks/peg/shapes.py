@@ -11,6 +11,8 @@ import math
 import re
 from dataclasses import dataclass
 
+import numpy as np
+
 from kintsugi.errors import ConfigError
 from kintsugi.tasks.peg.config import PegTaskConfig
 
@@ -35,6 +37,17 @@ class PegShape:
                 verts.append((self.circumradius * math.sin(a), self.circumradius * math.cos(a), z))
         return verts
 
+    def width(self, directions: np.ndarray) -> np.ndarray:
+        """Extent of the cross-section along each unit direction (rows of (x, y))."""
+        if self.kind == "cylinder":
+            return np.full(len(directions), 2 * self.half_y)
+        if self.kind == "box":
+            corners = np.array([(sx * self.half_x, sy * self.half_y) for sx in (-1, 1) for sy in (-1, 1)])
+        else:
+            corners = np.array([(x, y) for x, y, z in self.prism_vertices(1.0) if z > 0])
+        along = directions @ corners.T
+        return along.max(axis=1) - along.min(axis=1)
+
 
 @dataclass(frozen=True)
 class HoleShape:
@@ -58,6 +71,31 @@ class HoleShape:
         """The opening's extent along y (odd polygons are not symmetric about the axis)."""
         ys = [y for _, y in self.vertices()]
         return min(ys), max(ys)
+
+    @property
+    def x_range(self) -> tuple[float, float]:
+        """The opening's extent along x (what the side camera sees)."""
+        xs = [x for x, _ in self.vertices()]
+        return min(xs), max(xs)
+
+    def contains(self, x: float, y: float) -> bool:
+        """Is the point (relative to the hole axis) inside the opening's footprint?"""
+        return all(math.sin(a) * x + math.cos(a) * y <= d for a, d in self.sides)
+
+    def width(self, directions: np.ndarray) -> np.ndarray:
+        """Extent of the opening along each unit direction (rows of (x, y))."""
+        along = directions @ np.array(self.vertices()).T
+        return along.max(axis=1) - along.min(axis=1)
+
+
+def gap_along(peg: PegShape, hole: HoleShape, direction: tuple[float, float]) -> float:
+    """Hole width minus peg width along a horizontal unit direction (x, y), peg unrotated.
+
+    Across a round hole's flats or a square's sides this is the configured clearance;
+    along a square's diagonal it is sqrt(2) times that.
+    """
+    n = np.array([direction], dtype=float)
+    return float(hole.width(n)[0] - peg.width(n)[0])
 
 
 SHAPES_HELP = "round, square, rectangle, or polygonN (regular N-sided prism, N >= 3)"

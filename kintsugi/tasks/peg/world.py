@@ -1,8 +1,17 @@
 """The peg-insertion world: MuJoCo model + data, robot-side sensors, ground truth.
 
 `PegWorld` owns the physics. Methods and reasoners only ever get a `PegRobot`
-view (base pose, wrist compression/force, camera image and calibration);
+view (base pose, wrist compression/force, camera images and calibrations);
 `ground_truth()` exists for scoring and lives on the world, not the robot.
+
+Ground truth G: the peg tip is at least `scoring.min_depth_fraction` of the hole
+depth below the board top and inside the opening's footprint, and the peg axis
+is within `scoring.max_tilt_deg` of vertical. By default that is the largest tilt
+a rigid peg seated that deep can have, atan(gap / depth), with `gap` the hole's
+width minus the peg's along the direction the peg leans (the clearance across
+flats): a peg tilted further is wedged, squeezed into the walls by the soft
+contacts (measured: ~0.3 mm deep at ~500 N per contact), so it is jammed, not
+inserted; there is deliberately no margin above the rigid bound.
 """
 
 from __future__ import annotations
@@ -13,15 +22,15 @@ import mujoco
 import numpy as np
 
 from kintsugi.config import StrictModel
-from kintsugi.errors import SimulationDiverged, UnknownNameError
+from kintsugi.errors import ConfigError, SimulationDiverged, UnknownNameError
 from kintsugi.reasoning.types import CameraCalibration
 from kintsugi.tasks.peg.config import PegTaskConfig
 from kintsugi.tasks.peg.scene import build_mjcf
-from kintsugi.tasks.peg.shapes import MM, hole_for, peg_shape
+from kintsugi.tasks.peg.shapes import MM, gap_along, hole_for, peg_shape
 
 
 HOME_POSE = np.array([-0.05, 0.16, 0.0])  # y, z (m), roll (rad)
-SUCCESS_DEPTH = 0.010
+SIDE_HIDES_GROUP, MAIN_HIDES_GROUP = 1, 2  # each camera hides the other's painted rim (seen edge-on)
 _FATAL_WARNINGS = (
     mujoco.mjtWarning.mjWARN_BADQACC,
     mujoco.mjtWarning.mjWARN_BADQPOS,
@@ -37,14 +46,25 @@ class TrialParams(StrictModel):
 
     shape: str
     hole_y_mm: float = 0.0
+    hole_x_mm: float = 0.0
     friction_scale: float = 1.0
     grasp_angle_deg: float = 0.0
 
 
 class GroundTruth(StrictModel):
     tip_depth_mm: float
+    """Depth of the peg tip (axis centre of its bottom face) below the board top."""
     tip_offset_mm: float
+    """Tip minus hole axis along y (the main camera's plane)."""
+    tip_offset_x_mm: float
+    """Tip minus hole axis along x (out of the main camera's plane)."""
+    tilt_deg: float
+    """Angle between the peg axis and vertical, any direction."""
     inside_hole: bool
+    """The tip is below the board top and inside the opening's footprint."""
+    min_depth_mm: float
+    max_tilt_deg: float
+    """The tilt bound G applied (it depends on the lean direction unless configured)."""
     success: bool
 
 
@@ -72,13 +92,14 @@ class PegWorld:
         self._peg_body = _resolve(m, obj.mjOBJ_BODY, "peg")
         self._tip = _resolve(m, obj.mjOBJ_SITE, "peg_tip")
         self._camera = _resolve(m, obj.mjOBJ_CAMERA, "scene")
+        self._side_camera = _resolve(m, obj.mjOBJ_CAMERA, "side") if cfg.camera.side_view else None
         self._mocap = m.body_mocapid[_resolve(m, obj.mjOBJ_BODY, "base")]
         jz = _resolve(m, obj.mjOBJ_JOINT, "wrist_z")
         self._qz = m.jnt_qposadr[jz]
         self._wrist_j = [_resolve(m, obj.mjOBJ_JOINT, j) for j in ("wrist_z", "wrist_roll", "wrist_pitch", "wrist_yaw")]
         self._wrist_q = [m.jnt_qposadr[j] for j in self._wrist_j]
         # Trial truth applied to the compiled model.
-        m.body_pos[self._board, 1] = params.hole_y_mm * MM
+        m.body_pos[self._board, :2] = (params.hole_x_mm * MM, params.hole_y_mm * MM)
         for g in range(m.ngeom):
             if m.geom_bodyid[g] == self._board:
                 m.geom_friction[g, 0] = cfg.hole.friction * params.friction_scale
@@ -91,6 +112,13 @@ class PegWorld:
         self.set_base(HOME_POSE)
         mujoco.mj_forward(m, self.data)
         self._renderer: mujoco.Renderer | None = None
+        self._views = {}
+        for cam, hidden in ((self._camera, MAIN_HIDES_GROUP), (self._side_camera, SIDE_HIDES_GROUP)):
+            if cam is not None:
+                option = mujoco.MjvOption()
+                option.geomgroup[hidden] = 0
+                self._views[cam] = option
+        self.min_depth = cfg.scoring.min_depth_fraction * cfg.hole.depth_mm * MM
         self.steps = 0
 
     # --- actuation -------------------------------------------------------
@@ -137,10 +165,24 @@ class PegWorld:
         v = [self.data.qvel[self.model.jnt_dofadr[j]] for j in self._wrist_j]
         return abs(v[0]) < lin and max(abs(x) for x in v[1:]) < ang
 
+    @property
+    def has_side_view(self) -> bool:
+        return self._side_camera is not None
+
     def render(self) -> np.ndarray:
+        """The main camera: the y-z plane seen from +x (image right = +y)."""
+        return self._render(self._camera)
+
+    def render_side(self) -> np.ndarray:
+        """The optional side camera: the x-z plane seen from -y (image right = +x)."""
+        if self._side_camera is None:
+            raise ConfigError("this world has no side camera; set camera.side_view=true")
+        return self._render(self._side_camera)
+
+    def _render(self, camera: int) -> np.ndarray:
         if self._renderer is None:
             self._renderer = mujoco.Renderer(self.model, self.cfg.camera.height, self.cfg.camera.width)
-        self._renderer.update_scene(self.data, camera=self._camera)
+        self._renderer.update_scene(self.data, camera=camera, scene_option=self._views[camera])
         return self._renderer.render().copy()
 
     def calibration(self) -> CameraCalibration:
@@ -148,6 +190,17 @@ class PegWorld:
         return CameraCalibration(
             width=c.width, height=c.height, px_per_mm=c.height / c.view_height_mm,
             cu=c.width / 2, cv=c.height / 2, y0_mm=c.center_y_mm, z0_mm=c.center_z_mm,
+        )
+
+    def side_calibration(self) -> CameraCalibration:
+        """The side camera's calibration, same form as the main one but its horizontal axis is x:
+        `to_plane(u, v)` returns (x, z) in mm, and `y0_mm` holds the image centre's x."""
+        if self._side_camera is None:
+            raise ConfigError("this world has no side camera; set camera.side_view=true")
+        c = self.cfg.camera
+        return CameraCalibration(
+            width=c.width, height=c.height, px_per_mm=c.height / c.view_height_mm,
+            cu=c.width / 2, cv=c.height / 2, y0_mm=c.center_x_mm, z0_mm=c.center_z_mm,
         )
 
     def close(self) -> None:
@@ -158,12 +211,25 @@ class PegWorld:
     # --- ground truth: scoring only -------------------------------------
     def ground_truth(self) -> GroundTruth:
         tip = self.data.site_xpos[self._tip]
-        offset = tip[1] - self.params.hole_y_mm * MM
-        y0, y1 = self.hole.y_range
-        inside = y0 <= offset <= y1 and tip[2] < 0
-        depth = -tip[2]
-        return GroundTruth(tip_depth_mm=depth / MM, tip_offset_mm=offset / MM, inside_hole=bool(inside),
-                           success=bool(inside and depth >= SUCCESS_DEPTH))
+        dx, dy = tip[0] - self.params.hole_x_mm * MM, tip[1] - self.params.hole_y_mm * MM
+        depth = -float(tip[2])
+        inside = depth > 0 and self.hole.contains(dx, dy)
+        ax, ay, az = self.data.xmat[self._peg_body][[2, 5, 8]]  # the peg's axis in the world
+        lean = math.hypot(ax, ay)
+        tilt = math.degrees(math.atan2(lean, az))
+        max_tilt = self.max_tilt_deg((ax / lean, ay / lean) if lean > 1e-12 else (0.0, 1.0))
+        return GroundTruth(
+            tip_depth_mm=depth / MM, tip_offset_mm=dy / MM, tip_offset_x_mm=dx / MM, tilt_deg=tilt,
+            inside_hole=bool(inside), min_depth_mm=self.min_depth / MM, max_tilt_deg=max_tilt,
+            success=bool(inside and depth >= self.min_depth and tilt <= max_tilt),
+        )
+
+    def max_tilt_deg(self, lean: tuple[float, float]) -> float:
+        """G's tilt bound for a peg leaning along the horizontal unit direction `lean` (x, y)."""
+        fixed = self.cfg.scoring.max_tilt_deg
+        if fixed is not None:
+            return fixed
+        return math.degrees(math.atan2(gap_along(self.peg, self.hole, lean), self.min_depth))
 
 
 def _roll_quat(angle: float) -> np.ndarray:
