@@ -225,7 +225,7 @@ class StructuredClient:
     def _to_text(self, option: Option, why: str) -> str:
         self.text_only[option] = why
         what = "tool_choice=\"required\"" if option == "tools" else "response_format json_schema"
-        return f"{what}: {why}; switched to text mode for the rest of this run"
+        return f"{what}: {why}; switched to text mode for the rest of this reasoner's life"
 
     @staticmethod
     def _options(mode: Mode, reply: type[BaseModel], tools: ToolRoute | None) -> dict[str, Any]:
