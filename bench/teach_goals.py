@@ -1,6 +1,7 @@
 """How `kintsugi/tasks/peg/default_goals.json` was taught, and how much margin it has.
 
     .venv/bin/python bench/teach_goals.py [--span 7.5] [--step 1.5] [--write]
+    .venv/bin/python bench/teach_goals.py --set wrist.roll_stiffness=1.5 --shapes round --out goals.json
 
 In the default condition only (peg aligned in the grasp, hole at its nominal place,
 nominal friction; never a randomized trial), run approach and contact with the stored
@@ -11,6 +12,11 @@ grid is run by branching MuJoCo states (mj_copyData), so each cell costs only it
 align + insert. Prints, per cell, which shapes insert, and the taught goal's margin to the
 nearest failing cell. `--write` stores the most robust cell (largest distance to any
 failure, all shapes together) back into the file; without it the file is only read.
+
+For a changed robot or world (`--set`, as on the kintsugi command line), the same sweep
+re-teaches: `--out FILE` writes the most robust cell for that config (only if some cell
+inserts every swept shape), and `--set control.goals_file=FILE` makes kintsugi use it.
+Only the fit and align y goals are swept; approach, contact and insert keep their values.
 """
 
 from __future__ import annotations
@@ -19,11 +25,14 @@ import argparse
 import json
 import time
 from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
 
 import kintsugi  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
 import mujoco
 import numpy as np
 
+from kintsugi.config import apply_overrides
+from kintsugi.errors import KintsugiError
 from kintsugi.tasks.peg.config import PegTaskConfig
 from kintsugi.tasks.peg.goals import DEFAULT_GOALS_FILE, full_goals, load_goals
 from kintsugi.tasks.peg.skills import AXES, execute_skill
@@ -43,10 +52,10 @@ def _restore(world: PegWorld, snap: mujoco.MjData) -> None:
     mujoco.mj_copyData(world.data, world.model, snap)
 
 
-def sweep_shape(shape: str, goals: dict[str, dict[str, float]], fits: list[float], aligns: list[float]
-                ) -> dict[tuple[float, float], float]:
-    """Tip depth (mm, negative = above the board) for every (fit y, align y) cell, in mm."""
-    world = PegWorld(PegTaskConfig(), TrialParams(shape=shape))  # the default condition
+def sweep_shape(cfg_json: str, shape: str, goals: dict[str, dict[str, float]], fits: list[float],
+                aligns: list[float]) -> dict[tuple[float, float], float]:
+    """Tip depth (mm) for every (fit y, align y) cell; 0 or less where ground truth says not inserted."""
+    world = PegWorld(PegTaskConfig.model_validate_json(cfg_json), TrialParams(shape=shape))  # the default condition
     world.render = lambda: np.zeros((1, 1, 3), np.uint8)  # type: ignore[method-assign] - images unused
     targets = full_goals(goals, HOME_POSE)
     for skill in ("approach", "contact"):
@@ -90,39 +99,49 @@ def main() -> None:
     ap.add_argument("--step", type=float, default=1.5, help="grid step (mm)")
     ap.add_argument("--jobs", type=int, default=2, help="worker processes (one shape each)")
     ap.add_argument("--write", action="store_true", help="store the most robust cell in default_goals.json")
+    ap.add_argument("--set", dest="sets", action="append", default=[], metavar="KEY=VALUE",
+                    help="config override, as on the kintsugi command line (repeatable)")
+    ap.add_argument("--shapes", default=",".join(SHAPES), help=f"comma-separated shapes ({', '.join(SHAPES)})")
+    ap.add_argument("--out", help="write the goals with the most robust cell to this file (for control.goals_file)")
     args = ap.parse_args()
-
-    goals = load_goals()
+    try:
+        cfg = apply_overrides(PegTaskConfig(), args.sets)
+        goals = load_goals(cfg.control.goals_file)
+    except KintsugiError as exc:
+        raise SystemExit(f"error: {exc}") from None
+    shapes = {s: SHAPES.get(s, s[-1]) for s in args.shapes.split(",") if s}
+    if args.write and (args.sets or set(shapes) != set(SHAPES)):
+        raise SystemExit("error: --write stores the shipped defaults (default config, every shape); use --out FILE")
     taught = (goals["fit"]["y"], goals["align"]["y"])
     fits, aligns = _grid(taught[0], args.span, args.step), _grid(taught[1], args.span, args.step)
-    print(f"goals file: {DEFAULT_GOALS_FILE}")
+    print(f"goals file: {cfg.control.goals_file or DEFAULT_GOALS_FILE}; config changes: {', '.join(args.sets) or 'none'}")
     print("stored goals (mm, deg): " + "; ".join(f"{s} {v}" for s, v in goals.items()))
     print(f"sweep: fit y in [{fits[0]}, {fits[-1]}], align y in [{aligns[0]}, {aligns[-1]}], step {args.step} mm; "
-          f"condition none (aligned grasp, nominal hole and friction); shapes {', '.join(SHAPES)}\n")
+          f"condition none (aligned grasp, nominal hole and friction); shapes {', '.join(shapes)}\n")
 
     t0 = time.perf_counter()
     with ProcessPoolExecutor(max_workers=max(1, args.jobs)) as pool:
-        futures = {s: pool.submit(sweep_shape, s, goals, fits, aligns) for s in SHAPES}
+        futures = {s: pool.submit(sweep_shape, cfg.model_dump_json(), s, goals, fits, aligns) for s in shapes}
         depth = {s: f.result() for s, f in futures.items()}
     elapsed = time.perf_counter() - t0
 
-    ok = {s: {cell: d >= 10.0 for cell, d in depth[s].items()} for s in SHAPES}
-    every = {cell: all(ok[s][cell] for s in SHAPES) for cell in ok["round"]}
-    legend = ", ".join(f"{c} = {s}" for s, c in SHAPES.items())
-    print(f"Cells list the shapes that insert >= 10 mm ({legend}; '.' = none); [cell] = stored goal.\n")
+    ok = {s: {cell: d > 0.0 for cell, d in depth[s].items()} for s in shapes}
+    every = {cell: all(ok[s][cell] for s in shapes) for cell in ok[next(iter(shapes))]}
+    legend = ", ".join(f"{c} = {s}" for s, c in shapes.items())
+    print(f"Cells list the shapes that insert (ground truth G; {legend}; '.' = none); [cell] = stored goal.\n")
     print("| fit y \\ align y | " + " | ".join(f"{a:g}" for a in aligns) + " |")
     print("|---|" + "---|" * len(aligns))
     for fy in fits:
         cells = []
         for ay in aligns:
-            text = "".join(c for s, c in SHAPES.items() if ok[s][(fy, ay)]) or "."
+            text = "".join(c for s, c in shapes.items() if ok[s][(fy, ay)]) or "."
             cells.append(f"[{text}]" if (fy, ay) == taught else text)
         print(f"| **{fy:g}** | " + " | ".join(cells) + " |")
 
     print("\n| shape | stored goal inserts | depth at stored goal (mm) | cells inserting | "
           "margin to nearest failing cell (mm) | fit-y interval at stored align | align-y interval at stored fit |")
     print("|---|---|---|---|---|---|---|")
-    for s in SHAPES:
+    for s in shapes:
         row = [fy for fy in fits if ok[s][(fy, taught[1])]]
         col = [ay for ay in aligns if ok[s][(taught[0], ay)]]
         print(f"| {s} | {'yes' if ok[s][taught] else 'NO'} | {depth[s][taught]:.3f} | "
@@ -139,11 +158,22 @@ def main() -> None:
           f"(margin {min(_margin(every, best), edge[best]):.2f} mm, grid edge counted as a failure). "
           f"Sweep took {elapsed:.1f} s.")
 
-    if args.write:
-        raw = json.loads(DEFAULT_GOALS_FILE.read_text())
+    targets = [DEFAULT_GOALS_FILE] if args.write else []
+    targets += [Path(args.out)] if args.out else []
+    if targets and not every[best]:
+        raise SystemExit("error: no cell of the grid inserts every swept shape; nothing written "
+                         "(widen --span, or teach the approach/contact/insert goals by hand)")
+    for path in targets:
+        raw = {k: dict(v) for k, v in goals.items()}
+        raw["_comment"] = (f"Taught in the default condition with {', '.join(args.sets) or 'the default config'} "
+                           f"for {', '.join(shapes)} (bench/teach_goals.py): mm and degrees, wrist-base pose.")
         raw["fit"]["y"], raw["align"]["y"] = best
-        DEFAULT_GOALS_FILE.write_text(json.dumps(raw, indent=2) + "\n")
-        print(f"wrote fit y = {best[0]:g}, align y = {best[1]:g} to {DEFAULT_GOALS_FILE}")
+        try:
+            path.write_text(json.dumps(raw, indent=2) + "\n")
+        except OSError as exc:
+            raise SystemExit(f"error: cannot write {path}: {exc}") from None
+        print(f"wrote fit y = {best[0]:g}, align y = {best[1]:g} to {path}"
+              + ("" if path == DEFAULT_GOALS_FILE else f"; use it with --set control.goals_file={path}"))
 
 
 def _interval(values: list[float], at: float, step: float) -> str:

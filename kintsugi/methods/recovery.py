@@ -28,6 +28,7 @@ from kintsugi.reasoning.types import (
     JudgeRequest,
     PlanRequest,
     Pose,
+    RobotDescription,
     SkillOutcome,
 )
 from kintsugi.reasoning.validation import validate_plan
@@ -66,6 +67,7 @@ class Recovery:
         rec = self.cfg.recovery
         self.workspace = {"y": rec.workspace_y_mm, "z": rec.workspace_z_mm}
         self.calibration: CameraCalibration | None = None  # set from the robot when the trial starts
+        self.robot: RobotDescription | None = None  # likewise: what the robot knows about itself
 
     def _full_goal(self, skill: str) -> np.ndarray:
         """Full [y, z, roll] goal: '—' axes take the goals of the preceding contact formations."""
@@ -76,6 +78,7 @@ class Recovery:
 
     def run(self, robot: PegRobot, log: TrialLog) -> bool:
         self.calibration = robot.calibration
+        self.robot = robot.description(self.ctx.goals)
         try:
             return self._run(robot, log)
         finally:
@@ -100,7 +103,7 @@ class Recovery:
             checks = self._checks(skill, result, outcome)
             verdict = self.reasoner.judge(JudgeRequest(
                 task=self.ctx.task_text, outcome=outcome, checks=checks, success_criteria=CRITERIA[skill],
-                goal_image_png=self.goal_png[skill], calibration=robot.calibration))
+                goal_image_png=self.goal_png[skill], calibration=robot.calibration, robot=self.robot))
             log_skill(log, result, robot.sim_time, recovery=recovering, verdict=verdict.success,
                       message=verdict.explanation)
             log.say("         checks: " + "; ".join(f"{c.name}={'ok' if c.passed else c.message}" for c in checks))
@@ -149,10 +152,10 @@ class Recovery:
         analysis = self.reasoner.analyze(AnalyzeRequest(
             task=self.ctx.task_text, outcome=outcome, checks=checks, verdict=verdict, goals=self._pose_goals(),
             history=history[-6:], calibration=robot.calibration, max_step_mm=rec.max_step_mm, skills=skills,
-            goal_image_png=self.goal_png[outcome.skill]))
+            goal_image_png=self.goal_png[outcome.skill], robot=self.robot))
         log.say(f"         analysis: {analysis.what_happened} Why: {analysis.why} How: {analysis.how_to_recover}")
         request = PlanRequest(task=self.ctx.task_text, analysis=analysis, goals=self._pose_goals(), skills=skills,
-                              max_step_mm=rec.max_step_mm, workspace=self.workspace)
+                              max_step_mm=rec.max_step_mm, workspace=self.workspace, robot=self.robot)
         plan = validate_plan(self.reasoner.plan(request), request)
         for step in plan.steps:
             self.goals[step.skill].update(step.goal)

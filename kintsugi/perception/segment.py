@@ -6,11 +6,12 @@ This matches MuJoCo's renderer with ``cu = width / 2`` (the optical axis
 falls on the boundary between the two middle columns).
 Millimetres come from ``CameraCalibration.to_plane``: y grows to the right
 (u), z grows upward (against v).
+
+The colour thresholds and check tolerances (`PerceptionConfig`) are defined in
+`kintsugi.reasoning.types`, because reasoners are told them too.
 """
 
 from __future__ import annotations
-
-from typing import Annotated
 
 import cv2
 import numpy as np
@@ -18,41 +19,7 @@ from pydantic import Field
 
 from kintsugi.config import StrictModel
 from kintsugi.perception.tilt import TiltMethod, estimate_tilt
-from kintsugi.reasoning.types import CameraCalibration
-
-HSV = tuple[int, int, int]
-KernelPx = Annotated[int, Field(ge=1, le=31)]
-
-
-class HsvRange(StrictModel):
-    """Inclusive OpenCV HSV bounds (H in 0..180, S and V in 0..255)."""
-
-    lower: HSV
-    upper: HSV
-
-
-class PerceptionConfig(StrictModel):
-    """Colour thresholds, mask clean-up and the tolerances the checks use."""
-
-    peg_hsv: list[HsvRange] = Field(
-        default_factory=lambda: [HsvRange(lower=(78, 90, 40), upper=(102, 255, 255))],
-        description="cyan peg; hue 90 is pure cyan",
-    )
-    hole_hsv: list[HsvRange] = Field(
-        default_factory=lambda: [
-            HsvRange(lower=(0, 110, 40), upper=(10, 255, 255)),
-            HsvRange(lower=(170, 110, 40), upper=(180, 255, 255)),
-        ],
-        description="red wraps around hue 0/180, hence two ranges",
-    )
-    open_kernel_px: KernelPx = 3
-    close_kernel_px: KernelPx = 5
-    min_area_px: float = Field(default=40.0, ge=0)
-    align_tol_mm: float = Field(default=3.0, ge=0, description="|P_center - H_center| counted as 'on the hole'")
-    tilt_tol_deg: float = Field(default=5.0, ge=0, description="tilt within ±this is 'vertical'")
-    insert_top_tol_mm: float = Field(default=3.0, ge=0, description="peg-top height match vs the goal image")
-    insert_min_iou: float = Field(default=0.5, ge=0, le=1, description="peg masks must overlap at least this")
-    board_surface_z_mm: float = Field(default=0.0, description="used when the board line is not found in the image")
+from kintsugi.reasoning.types import CameraCalibration, HsvRange, PerceptionConfig  # noqa: F401 - re-exported
 
 
 class Blob(StrictModel):

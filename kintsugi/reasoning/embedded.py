@@ -5,6 +5,12 @@ OpenCV pass (peg/hole positions, tilt, whether the peg's outline continues
 below the board line, i.e. is inside the hole), reads the check messages and
 the robot's poses and wrist force, and answers each role with rules a person
 would apply looking at the picture. It never touches the simulator.
+
+Every robot-specific number comes from the request's `RobotDescription` (the
+robot's own build config and vision settings): the lever that turns a base
+shift into a tilt, the contact press a sunk tip relieves, the hole clearance
+and the check tolerances. The constants below are the rules' own
+proportions, the same for any robot.
 """
 
 from __future__ import annotations
@@ -15,6 +21,7 @@ from dataclasses import dataclass, replace
 import cv2
 import numpy as np
 
+from kintsugi.errors import ReasoningError
 from kintsugi.perception.segment import PerceptionConfig, board_surface_v, measure, peg_mask
 from kintsugi.reasoning import REASONERS
 from kintsugi.reasoning.types import (
@@ -27,18 +34,21 @@ from kintsugi.reasoning.types import (
     PlanRequest,
     PlanStep,
     RelativeMotion,
+    RobotDescription,
 )
 from kintsugi.trial import ReasonerSettings
 
 RECOVERY_ORDER = ("fit", "align", "insert")
-PIVOT_MM = 140.0
-"""Rough lever from the wrist to the peg tip: base shift that tilts a peg pivoting in the hole by 1 rad."""
-HOLE_MARGIN_MM = 1.5
-"""Slack when deciding whether the peg's cut outline lies inside the hole's opening (pixels are 0.6 mm)."""
-FIT_RELEASED_N = 6.0
-"""A tip that sank into the hole relieves most of the contact press (about 11 N when taught)."""
+HOLE_MARGIN_PX = 2.4
+"""Slack, in pixels, when deciding whether the peg's cut outline lies inside the hole's opening."""
+FIT_RELEASED_FRACTION = 0.5
+"""A tip that sank into the hole relieves at least half the contact press; one caught on the rim keeps it."""
 ALIGN_GAIN = 0.8
 """Fraction of the tilt correction to apply at once (the wrist absorbs part of any base motion)."""
+PROBE_FRACTION = 0.75
+"""A peg over the hole yet caught on a rim is probed sideways by this fraction of the clearance."""
+TILT_RESOLUTION_DEG = 1.0
+"""Tilts within this are measurement noise: the peg counts as upright."""
 
 
 @dataclass(frozen=True)
@@ -69,7 +79,7 @@ def decode_png(png: bytes) -> np.ndarray:
 
 
 def look(png: bytes | None, calib: CameraCalibration, cfg: PerceptionConfig) -> Seen:
-    """Measure an image; `in_hole` = the peg's outline is cut wide by the board line."""
+    """Measure an image; `in_hole` = the peg's outline is cut wide by the board line, inside the opening."""
     if png is None:
         return Seen(peg=False, hole=False)
     rgb = decode_png(png)
@@ -88,7 +98,7 @@ def look(png: bytes | None, calib: CameraCalibration, cfg: PerceptionConfig) -> 
             # if that cut lies inside the opening (else it rests on the surface with a corner in the hole).
             left = calib.to_plane(float(cut[0]), v_surface)[0]
             right = calib.to_plane(float(cut[-1]) + 1.0, v_surface)[0]
-            margin = HOLE_MARGIN_MM
+            margin = HOLE_MARGIN_PX / calib.px_per_mm
             in_hole = left >= scene.hole.left_mm - margin and right <= scene.hole.right_mm + margin
     contours, _ = cv2.findContours(mask.astype(np.uint8), cv2.RETR_EXTERNAL, cv2.CHAIN_APPROX_SIMPLE)
     box = cv2.boxPoints(cv2.minAreaRect(max(contours, key=cv2.contourArea)))
@@ -99,15 +109,33 @@ def look(png: bytes | None, calib: CameraCalibration, cfg: PerceptionConfig) -> 
                 tilt=p.tilt_deg, in_hole=bool(in_hole), peg_top_z=p.top_mm, tip_y=tip_y)
 
 
+def robot_of(req: JudgeRequest | AnalyzeRequest) -> RobotDescription:
+    if req.robot is None:
+        raise ReasoningError("the embedded reasoner needs the robot's description (request.robot): its thresholds "
+                             "come from the robot's own lever, wrist stiffness, contact press and vision settings")
+    return req.robot
+
+
+def fit_released(force_n: float, robot: RobotDescription) -> bool:
+    """The wrist no longer feels most of the contact press: the tip has sunk past the surface."""
+    return force_n <= FIT_RELEASED_FRACTION * max(robot.contact_press_n, 0.0)
+
+
+def realign_shift(tilt_deg: float, robot: RobotDescription) -> float:
+    """Base shift (mm) that turns a peg pivoting on its tip in the hole upright, damped by ALIGN_GAIN."""
+    return ALIGN_GAIN * robot.compliance_to_tip_mm * math.tan(math.radians(tilt_deg))
+
+
 class EmbeddedReasoner:
     name = "embedded"
 
-    def __init__(self, perception: PerceptionConfig | None = None) -> None:
-        self.cfg = perception or PerceptionConfig()
+    def __init__(self) -> None:
         self.last_stats = None
 
     # --- judge: fuse the checks into one verdict -----------------------
     def judge(self, req: JudgeRequest) -> JudgeReply:
+        robot = robot_of(req)
+        cfg = robot.vision
         checks = {c.name: c for c in req.checks}
         out = req.outcome
         if out.compression_limit:
@@ -116,18 +144,18 @@ class EmbeddedReasoner:
                 f"so {out.skill} failed whatever the image shows."))
         if "pose" in checks and not checks["pose"].passed:
             return JudgeReply(success=False, explanation=f"The arm did not reach its goal: {checks['pose'].message}")
-        seen = look(out.image_png, req.calibration, self.cfg)
+        seen = look(out.image_png, req.calibration, cfg)
         if not (seen.peg and seen.hole):
             return JudgeReply(success=False, explanation="The camera cannot see both the peg and the hole.")
         where = f"peg centre {seen.offset:+.1f} mm from the hole centre, tilt {seen.tilt:+.1f} deg"
         if out.skill == "fit":
             vision = checks.get("vision_fit")
             table = vision.message if vision else "no vision check"
-            pressed = out.wrist_force_z_n > FIT_RELEASED_N
-            if seen.in_hole and pressed:
+            if seen.in_hole and not fit_released(out.wrist_force_z_n, robot):
                 return JudgeReply(success=False, explanation=(
                     f"Fit failed: the peg's outline dips below the board line, but the wrist still presses with "
-                    f"{out.wrist_force_z_n:.1f} N, so the tip has not sunk into the hole ({where})."))
+                    f"{out.wrist_force_z_n:.1f} N of the {robot.contact_press_n:.1f} N contact press, so the tip has "
+                    f"not sunk into the hole ({where})."))
             if seen.in_hole:  # the formation's purpose; align corrects any residual offset or tilt
                 note = "" if vision and vision.passed else f" (Table I says '{table}'; align will correct it)"
                 return JudgeReply(success=True, explanation=(
@@ -146,8 +174,8 @@ class EmbeddedReasoner:
         if image is None:
             return JudgeReply(success=False, explanation="Insert failed: no goal-image comparison was given.")
         diff = image.measurements.get("top_difference_mm", float("inf"))
-        deep = abs(diff) <= self.cfg.insert_top_tol_mm
-        centred = abs(seen.offset) <= self.cfg.align_tol_mm + 2.0
+        deep = abs(diff) <= cfg.insert_top_tol_mm
+        centred = abs(seen.offset) <= cfg.align_tol_mm + robot.hole_clearance_mm
         ok = deep and seen.in_hole and centred
         if ok:
             why = (f"the peg stands as low as in the goal image (top {diff:+.1f} mm from it) and is centred on the "
@@ -160,10 +188,11 @@ class EmbeddedReasoner:
 
     # --- analyze: what happened, why, how to recover ---------------------
     def analyze(self, req: AnalyzeRequest) -> AnalyzeReply:
-        seen = look(req.outcome.image_png, req.calibration, self.cfg)
-        goal = look(req.goal_image_png, req.calibration, self.cfg)
+        robot = robot_of(req)
+        seen = look(req.outcome.image_png, req.calibration, robot.vision)
+        goal = look(req.goal_image_png, req.calibration, robot.vision)
         skill = req.outcome.skill
-        if skill == "fit" and req.outcome.wrist_force_z_n > FIT_RELEASED_N:
+        if skill == "fit" and not fit_released(req.outcome.wrist_force_z_n, robot):
             seen = replace(seen, in_hole=False)  # still pressed: the tip has not sunk in (see judge)
         want = goal.offset if (goal.peg and goal.hole) else 0.0  # taught peg-to-hole offset for this skill
         if not (seen.peg and seen.hole):
@@ -174,17 +203,20 @@ class EmbeddedReasoner:
                  f"{seen.tilt:+.1f} deg, tip {'inside' if seen.in_hole else 'outside'} the hole")
         if skill == "fit" or not seen.in_hole:
             tries = sum(1 for a in req.history if a.skill == "fit" and not a.success)
-            return self._refit(skill, seen, want if skill == "fit" else None, state, tries)
-        return self._realign(req, skill, seen, state)
+            return self._refit(skill, seen, want if skill == "fit" else None, state, tries, robot)
+        return self._realign(skill, seen, state, robot)
 
-    def _refit(self, skill: str, seen: Seen, want: float | None, state: str, tries: int) -> AnalyzeReply:
+    def _refit(self, skill: str, seen: Seen, want: float | None, state: str, tries: int,
+               robot: RobotDescription) -> AnalyzeReply:
         """The tip is not (or not properly) in the hole: slide again so the tip sits over the hole."""
-        if seen.in_hole and want is not None:  # in, but the centre passed the hole centre
-            shift = min(want - seen.offset, -seen.offset - 2.0)
+        clearance = robot.hole_clearance_mm
+        if seen.in_hole and want is not None:  # in, but the centre passed the hole centre: back to its near side
+            shift = min(want - seen.offset, -seen.offset - clearance)
         else:
             shift = seen.hole_y - seen.tip_y  # centre the tip over the opening, where it drops in
-            if abs(shift) < 1.0:  # over the hole yet caught on a rim: probe either side, alternately
-                shift = 1.5 if tries % 2 == 0 else -1.5
+            if abs(shift) < clearance / 2:  # over the hole yet caught on a rim: probe either side, alternately
+                probe = PROBE_FRACTION * clearance
+                shift = probe if tries % 2 == 0 else -probe
         why = ("the fit goal does not match where the hole is (hole pose error, grasp angle or friction drag)"
                if skill == "fit" else f"the peg slipped out of the hole during {skill}")
         how = f"run fit again with its y goal moved {shift:+.1f} mm, then align (same shift) and insert"
@@ -192,15 +224,16 @@ class EmbeddedReasoner:
                    RelativeMotion(skill="align", axis="y", delta=round(shift, 2))]
         return self._reply(skill, state, why, "fit", motions, how)
 
-    def _realign(self, req: AnalyzeRequest, skill: str, seen: Seen, state: str) -> AnalyzeReply:
+    def _realign(self, skill: str, seen: Seen, state: str, robot: RobotDescription) -> AnalyzeReply:
         """Tip in the hole: rotate the peg upright and centre it by moving the align goal."""
-        tilt_shift = ALIGN_GAIN * PIVOT_MM * math.tan(math.radians(seen.tilt))
+        tilted = abs(seen.tilt) > TILT_RESOLUTION_DEG
         # In the hole the peg can only pivot: its visible centre's offset follows from its tilt,
         # so the tilt decides; only an upright peg is re-centred.
-        shift = tilt_shift if abs(seen.tilt) > 1.0 else -seen.offset
-        if abs(shift) < 1.0:
-            shift = 1.5 if seen.tilt >= 0 else -1.5  # looks aligned yet failed: nudge toward upright
-        why = "the peg is still tilted in the hole" if abs(seen.tilt) > 1.0 else "the peg is off the hole centre"
+        shift = realign_shift(seen.tilt, robot) if tilted else -seen.offset
+        if abs(shift) < robot.hole_clearance_mm / 2:  # looks aligned yet failed: nudge toward upright
+            probe = PROBE_FRACTION * robot.hole_clearance_mm
+            shift = probe if seen.tilt >= 0 else -probe
+        why = "the peg is still tilted in the hole" if tilted else "the peg is off the hole centre"
         if skill == "insert":
             why = f"insertion jammed: {why}"
         how = f"move the align goal {shift:+.1f} mm in y, then insert again"

@@ -8,7 +8,7 @@ Units follow what a person (or a model) reads best: millimetres and degrees.
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import Annotated, Literal
 
 from pydantic import Field
 
@@ -48,6 +48,84 @@ class CameraCalibration(StrictModel):
         return self.y0_mm + (u - self.cu) / self.px_per_mm, self.z0_mm - (v - self.cv) / self.px_per_mm
 
 
+HSV = tuple[int, int, int]
+KernelPx = Annotated[int, Field(ge=1, le=31)]
+
+
+class HsvRange(StrictModel):
+    """Inclusive OpenCV HSV bounds (H in 0..180, S and V in 0..255)."""
+
+    lower: HSV
+    upper: HSV
+
+
+class PerceptionConfig(StrictModel):
+    """Colour thresholds, mask clean-up and the tolerances the checks use (`--set perception.*`).
+
+    Defined here rather than in `kintsugi.perception` because reasoners are told it: the
+    embedded reasoner measures images with the same settings as the checks.
+    """
+
+    peg_hsv: list[HsvRange] = Field(
+        default_factory=lambda: [HsvRange(lower=(78, 90, 40), upper=(102, 255, 255))],
+        description="cyan peg; hue 90 is pure cyan",
+    )
+    hole_hsv: list[HsvRange] = Field(
+        default_factory=lambda: [
+            HsvRange(lower=(0, 110, 40), upper=(10, 255, 255)),
+            HsvRange(lower=(170, 110, 40), upper=(180, 255, 255)),
+        ],
+        description="red wraps around hue 0/180, hence two ranges",
+    )
+    open_kernel_px: KernelPx = 3
+    close_kernel_px: KernelPx = 5
+    min_area_px: float = Field(default=40.0, ge=0)
+    align_tol_mm: float = Field(default=3.0, ge=0, description="|P_center - H_center| counted as 'on the hole'")
+    tilt_tol_deg: float = Field(default=5.0, ge=0, description="tilt within ±this is 'vertical'")
+    insert_top_tol_mm: float = Field(default=3.0, ge=0, description="peg-top height match vs the goal image")
+    insert_min_iou: float = Field(default=0.5, ge=0, le=1, description="peg masks must overlap at least this")
+    board_surface_z_mm: float = Field(default=0.0, description="used when the board line is not found in the image")
+
+
+class RobotDescription(StrictModel):
+    """What the robot knows about itself and what the task states, from the config it was built with.
+
+    A real robot knows its own build (wrist springs, gripper, the peg it was handed, the commands
+    its skills send) and its vision settings; it does not know a trial's randomized truth (where
+    the hole really is, the in-grasp angle, the friction), nor the ranges that truth is drawn
+    from, and neither appears here. Reasoners derive their thresholds from this description.
+    """
+
+    peg_shape: str
+    peg_width_mm: float = Field(description="nominal width of the peg in the camera's image plane (along y)")
+    peg_length_mm: float
+    hole_clearance_mm: float = Field(description="hole width minus peg width, as the task states it")
+    hole_depth_mm: float
+    compliance_to_tip_mm: float = Field(
+        description="from the wrist's compliance centre (roll hinge, at the base pose) to the peg tip along the peg; "
+                    "a base shift d tilts a peg pivoting on its tip by about atan(d / this)")
+    wrist_z_stiffness_n_per_mm: float
+    wrist_roll_stiffness_nm_per_rad: float
+    contact_press_mm: float = Field(
+        description="wrist compression the taught contact goal commands on the board surface (the press fit starts "
+                    "with); a tip that drops into the hole relieves part of it")
+    compression_limit_mm: float = Field(description="a skill halts at once when the wrist is compressed beyond this")
+    pose_tol_mm: float = Field(description="a goal counts as reached within this distance")
+    vision: PerceptionConfig = Field(description="the settings the vision checks measure the images with")
+
+    @property
+    def hole_width_mm(self) -> float:
+        return self.peg_width_mm + self.hole_clearance_mm
+
+    @property
+    def contact_press_n(self) -> float:
+        return self.contact_press_mm * self.wrist_z_stiffness_n_per_mm
+
+    @property
+    def compression_limit_n(self) -> float:
+        return self.compression_limit_mm * self.wrist_z_stiffness_n_per_mm
+
+
 class CheckResult(StrictModel):
     """One mechanical check (vision, pose, compression limit) and its message."""
 
@@ -77,6 +155,8 @@ class JudgeRequest(StrictModel):
     success_criteria: str
     goal_image_png: bytes | None = Field(default=None, repr=False)
     calibration: CameraCalibration
+    robot: RobotDescription | None = Field(
+        default=None, description="the robot's own description; None when the caller does not describe it")
 
 
 class JudgeReply(StrictModel):
@@ -109,6 +189,8 @@ class AnalyzeRequest(StrictModel):
     goal_image_png: bytes | None = Field(
         default=None, repr=False, description="I_g: the failed skill's terminal image in the default condition"
     )
+    robot: RobotDescription | None = Field(
+        default=None, description="the robot's own description; None when the caller does not describe it")
 
 
 class RelativeMotion(StrictModel):
@@ -134,6 +216,8 @@ class PlanRequest(StrictModel):
     workspace: dict[Axis, tuple[float, float]] = Field(
         default_factory=dict, description="absolute bounds per axis, mm (y, z) or degrees (roll)"
     )
+    robot: RobotDescription | None = Field(
+        default=None, description="the robot's own description; None when the caller does not describe it")
 
 
 class PlanStep(StrictModel):

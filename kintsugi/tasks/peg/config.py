@@ -81,6 +81,8 @@ class ControlSection(StrictModel):
     timeout_s: float = Field(6.0, gt=0)
     compression_limit_mm: float = Field(20.0, gt=0)
     """The running skill halts at once when the z spring is compressed beyond this."""
+    goals_file: str | None = None
+    """Taught goals (JSON, mm / deg) written by `bench/teach_goals.py --out`; None = the shipped default_goals.json."""
 
 
 class CameraSection(StrictModel):
