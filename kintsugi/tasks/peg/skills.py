@@ -3,7 +3,9 @@
 Each skill moves the wrist base in position control at bounded speed toward a
 goal on its own axes ("—" axes keep the previous goal), and ends at the goal
 (after a short settle), on a timeout, or at once when the wrist's z spring
-passes the compression limit.
+passes the compression limit. Approach, the one skill that may be asked to leave
+the hole (as a recovery re-approach), first rises straight up when its goal is
+higher, so it never drags the peg sideways out of the hole.
 """
 
 from __future__ import annotations
@@ -72,6 +74,7 @@ def execute_skill(
     limit = ctl.compression_limit_mm * 1e-3
     t0 = world.data.time
     pose = world.base_pose()
+    legs = _legs(skill, pose, goal)
     reached = halted = False
     settle_left = ctl.settle_s
     max_comp = 0.0
@@ -83,9 +86,11 @@ def execute_skill(
         if elapsed >= ctl.timeout_s:
             break
         if not reached:
-            pose = _step_toward(pose, goal, v_lin, v_rot)
+            pose = _step_toward(pose, legs[0], v_lin, v_rot)
             world.set_base(pose)
-            reached = bool(np.all(pose == goal))
+            if np.all(pose == legs[0]):
+                legs.pop(0)
+            reached = not legs
         world.step(n_sub)
         comp = world.wrist_compression()
         max_comp = max(max_comp, comp)
@@ -107,6 +112,13 @@ def execute_skill(
         compression=world.wrist_compression(), max_compression=max_comp,
         image=world.render(), sim_time=world.data.time - t0,
     )
+
+
+def _legs(skill: str, pose: np.ndarray, goal: np.ndarray) -> list[np.ndarray]:
+    """Straight to the goal, except an approach to a higher goal: straight up (same roll) first."""
+    if skill == "approach" and goal[1] > pose[1] and (goal[0] != pose[0] or goal[2] != pose[2]):
+        return [np.array((pose[0], goal[1], pose[2])), goal.copy()]
+    return [goal.copy()]
 
 
 def _step_toward(pose: np.ndarray, goal: np.ndarray, v_lin: float, v_rot: float) -> np.ndarray:
