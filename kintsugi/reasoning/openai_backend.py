@@ -26,6 +26,7 @@ from kintsugi.errors import ConfigError
 from kintsugi.reasoning import REASONERS
 from kintsugi.reasoning.base import CallStats, redact
 from kintsugi.reasoning.jsontext import BadReply  # noqa: F401 - re-exported
+from kintsugi.reasoning.prompting import robot_section
 from kintsugi.reasoning.structured import (  # noqa: F401 - EndpointError, strict_schema, MAX_ATTEMPTS re-exported
     MAX_ATTEMPTS,
     EndpointError,
@@ -185,7 +186,7 @@ class OpenAIReasoner:
             return f"<image {len(images)}, attached below>"
 
         payload = redact(request, on_bytes)
-        text = f"{load_prompt(role)}\n\n# Request\n```json\n{json.dumps(payload, indent=2)}\n```"
+        text = f"{load_prompt(role)}\n\n{robot_section(request)}# Request\n```json\n{json.dumps(payload, indent=2)}\n```"
         if not images:
             return text
         parts: list[dict[str, Any]] = [{"type": "text", "text": text}]
