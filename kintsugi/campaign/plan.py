@@ -70,19 +70,15 @@ def _check_name(name: str, what: str) -> None:
 def build_config(**fields: Any) -> CampaignConfig:
     """A CampaignConfig from user input (the CLI's `run` and `bench`), fully validated before any trial.
 
-    The task is looked up first, so a mistyped task name reads "unknown task", and every
+    Names are looked up before the format rules run, so `peg[/x]` reads "unknown task", and every
     problem is a one-line KintsugiError rather than a pydantic traceback.
     """
-    from kintsugi.campaign.bootstrap import bootstrap
-
-    bootstrap(list(fields.get("plugins") or []), str(fields.get("task", "")))
+    validate(CampaignConfig.model_construct(**fields))
     try:
-        cfg = CampaignConfig(**fields)
+        return CampaignConfig(**fields)
     except ValidationError as exc:
         problems = "; ".join(f"{'.'.join(str(p) for p in e['loc']) or 'config'}: {e['msg']}" for e in exc.errors())
         raise ConfigError(f"bad campaign setting: {problems}") from None
-    validate(cfg)
-    return cfg
 
 
 def validate(cfg: CampaignConfig) -> None:
