@@ -19,6 +19,7 @@ from pydantic import ValidationError
 from kintsugi.errors import ConfigError, UnknownNameError
 from kintsugi.perception.features import (
     CameraModel,
+    FeatureConfig,
     ObjectFeatures,
     Primitive,
     body_geom_ids,
@@ -26,7 +27,9 @@ from kintsugi.perception.features import (
     object_cloud,
     object_clouds,
     render_view,
+    see_through,
 )
+from kintsugi.perception.primitives import Fit
 
 W, H = 320, 240
 SCENE = f"""
@@ -194,6 +197,24 @@ def test_wrong_shape_falls_back_to_raw(scene: Scene) -> None:
     assert f.visible and f.fit == "raw" and "cylinder fit" in f.note
     assert f.centroid == f.raw_centroid
     assert features("bottle", scene.clouds["bottle"], Primitive.sphere(0.03)).fit == "raw"
+
+
+def test_views_reject_a_shape_that_claims_seen_empty_space(scene: Scene) -> None:
+    # A 20 cm cylinder can lay its cap and side on two faces of the block: the points alone accept it ...
+    wrong = Primitive.cylinder(0.1, 0.1)
+    assert features("block", scene.clouds["block"], wrong).fit == "primitive"
+    # ... but both cameras see the table where that cylinder would be.
+    f = features("block", scene.clouds["block"], wrong, views=scene.views)
+    assert f.fit == "raw" and f.note == "cylinder fit contradicts the views"
+    # A bottle seen from one end could extend either way from its cap; the cameras see through the wrong one.
+    centre, _ = scene.truth("bottle")
+    right = Fit("cylinder", centre, np.eye(3), np.array([0.035, 0.11, 0.0]), 0.0, 1.0)
+    flipped = Fit("cylinder", centre + [0, 0, 0.22], np.eye(3), np.array([0.035, 0.11, 0.0]), 0.0, 1.0)
+    assert see_through(right, scene.views[:1], FeatureConfig()) == 0.0
+    assert see_through(flipped, scene.views[:1], FeatureConfig()) > 0.5
+    for name, prim in PRIMITIVES.items():  # the right shapes pass the same check
+        g = features(name, scene.clouds[name], prim, views=scene.views)
+        assert g.fit == "primitive" and g.centroid == scene.feats[name].centroid
 
 
 def test_too_few_points_for_a_fit(scene: Scene) -> None:

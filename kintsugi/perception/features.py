@@ -9,6 +9,7 @@ otherwise, or when that fit fails, from the raw cloud (`fit="raw"`, with a note)
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from typing import Literal
 
 import numpy as np
@@ -17,7 +18,7 @@ from pydantic import Field
 from kintsugi.config import StrictModel
 from kintsugi.errors import ConfigError
 from kintsugi.perception.cloud import CameraModel, View, body_geom_ids, object_cloud, object_clouds, render_view
-from kintsugi.perception.primitives import Fit, FitSettings, Primitive, box_starts, fit_box, fit_cylinder, fit_sphere
+from kintsugi.perception.primitives import Fit, FitSettings, Primitive, fit_primitive, surface_samples
 
 __all__ = [
     "CameraModel",
@@ -46,6 +47,8 @@ class FeatureConfig(StrictModel):
     min_inliers: float = Field(0.7, gt=0.0, le=1.0)  # a fit must put this share of points on its surface
     inlier_tol: float = Field(0.003, gt=0.0)  # metres from the surface that count as on it
     max_shift: float = Field(0.02, gt=0.0)  # a fit may move the centre this much beyond the primitive's half size
+    max_see_through: float = Field(0.05, ge=0.0, le=1.0)  # share of a fitted surface the cameras may see through
+    see_through_tol: float = Field(0.005, gt=0.0)  # metres beyond the fitted surface that count as seeing through
     band: float = Field(0.005, gt=0.0)  # raw extremes: centre of the points within this of the extreme
     upright_tol_deg: float = Field(15.0, gt=0.0, lt=90.0)  # upright: axis within this of vertical
     min_elongation: float = Field(1.3, ge=1.0)  # raw/box axis is defined when spread ratio >= this
@@ -70,7 +73,7 @@ class ObjectFeatures(StrictModel):
     centroid: Vec3 | None = None
     raw_centroid: Vec3 | None = None  # mean of the visible points (biased towards the cameras)
     axis: Vec3 | None = None
-    extent: Vec3 | None = None  # cloud size along the axis and the two other principal directions
+    extent: Vec3 | None = None  # cloud size along the axis, then along its two principal directions across it
     tilt_deg: float | None = None  # angle between axis and vertical, 0..90
     upright: bool | None = None  # None when the object has no well-defined axis
     extremes: dict[str, Vec3] = Field(default_factory=dict)
@@ -103,20 +106,22 @@ def _band_extreme(p: np.ndarray, d: np.ndarray, band: float) -> np.ndarray:
     return mean + (t.max() - mean @ d) * d
 
 
-def _fit(p: np.ndarray, primitive: Primitive, axes: np.ndarray, cfg: FeatureConfig) -> Fit | None:
-    s = FitSettings(inlier_tol=cfg.inlier_tol)
-    if len(p) > cfg.fit_points:
-        p = p[np.linspace(0, len(p) - 1, cfg.fit_points).round().astype(np.int64)]
-    if primitive.kind == "cylinder":
-        starts: list[np.ndarray] = []
-        for a in (axes[:, 0], UP, axes[:, 1], axes[:, 2]):
-            if all(abs(a @ b) < 0.95 for b in starts):
-                starts.append(a)
-        return fit_cylinder(p, float(primitive.radius), primitive.half_length, starts, s)
-    if primitive.kind == "box":
-        he = np.asarray(primitive.half_extents, float)
-        return fit_box(p, he, box_starts(axes, p, he), s)
-    return fit_sphere(p, float(primitive.radius), s)
+def see_through(fit: Fit, views: Sequence[tuple[CameraModel, np.ndarray, np.ndarray]], cfg: FeatureConfig) -> float:
+    """Share of the fitted solid's surface that some camera sees through (it saw something farther away).
+
+    A shape can match the visible points and still claim space the cameras saw
+    empty (a too-big cylinder on a box, a bottle fitted upside down on its cap).
+    """
+    pts = surface_samples(fit, cfg.inlier_tol)
+    seen = bad = 0
+    for cam, depth, _ in views:
+        z = -((pts - cam.pos) @ cam.xmat[:, 2])
+        pix = np.floor(cam.project(pts)).astype(np.int64)
+        ok = (z > 1e-6) & (pix[:, 0] >= 0) & (pix[:, 0] < cam.width) & (pix[:, 1] >= 0) & (pix[:, 1] < cam.height)
+        rendered = np.asarray(depth)[pix[ok, 1], pix[ok, 0]]
+        seen += int(ok.sum())
+        bad += int(np.count_nonzero(rendered > z[ok] + cfg.see_through_tol))
+    return bad / seen if seen else 0.0
 
 
 def _box_axis_defined(size: np.ndarray, min_elongation: float) -> bool:
@@ -125,9 +130,18 @@ def _box_axis_defined(size: np.ndarray, min_elongation: float) -> bool:
 
 
 def features(
-    name: str, cloud: np.ndarray, primitive: Primitive | None = None, config: FeatureConfig | None = None
+    name: str,
+    cloud: np.ndarray,
+    primitive: Primitive | None = None,
+    config: FeatureConfig | None = None,
+    views: Sequence[tuple[CameraModel, np.ndarray, np.ndarray]] | None = None,
 ) -> ObjectFeatures:
-    """Features of one object's fused cloud; fits `primitive` when it is known."""
+    """Features of one object's fused cloud; fits `primitive` when it is known.
+
+    Pass the `views` the cloud came from to reject fits that claim space the
+    cameras saw through (recommended: it also settles which way a cylinder
+    seen only from one end extends).
+    """
     cfg = config or FeatureConfig()
     p = np.asarray(cloud, dtype=np.float64)
     if p.ndim != 2 or p.shape[1] != 3:
@@ -150,9 +164,12 @@ def features(
     elif n < cfg.min_fit_points:
         note = f"{n} points < {cfg.min_fit_points} for a {kind} fit"
     else:
-        fit = _fit(p, primitive, axes, cfg)  # type: ignore[arg-type]
+        s = FitSettings(inlier_tol=cfg.inlier_tol)
+        q = p[np.linspace(0, n - 1, cfg.fit_points).round().astype(np.int64)] if n > cfg.fit_points else p
+        accept = (lambda f: see_through(f, views, cfg) <= cfg.max_see_through) if views else None
+        fit, rejected = fit_primitive(q, primitive, axes, s, accept)  # type: ignore[arg-type]
         if fit is None:
-            note = f"{kind} fit did not converge"
+            note = f"{kind} fit contradicts the views" if rejected else f"{kind} fit did not converge"
         elif fit.inliers < cfg.min_inliers:
             note = f"{kind} fit put only {fit.inliers:.0%} of points on its surface"
             fit = None
@@ -184,7 +201,8 @@ def features(
             "axis_neg": _band_extreme(p, -axis, cfg.band),
         }
 
-    others = np.linalg.svd(np.eye(3) - np.outer(axis, axis))[0][:, :2]  # two unit directions across the axis
+    across = p - np.outer(p @ axis, axis)
+    others = _principal(across)[0][:, :2]  # the cloud's main directions across the axis
     spans = [float(np.ptp(p @ d)) for d in (axis, others[:, 0], others[:, 1])]
     tilt = float(np.degrees(np.arccos(np.clip(axis[2], -1.0, 1.0))))
     return ObjectFeatures(
@@ -198,7 +216,7 @@ def features(
         centroid=_vec(centroid),
         raw_centroid=_vec(raw_centroid),
         axis=_vec(axis),
-        extent=(spans[0], *sorted(spans[1:], reverse=True)),
+        extent=(spans[0], spans[1], spans[2]),
         tilt_deg=tilt if has_axis else None,
         upright=(tilt <= cfg.upright_tol_deg) if has_axis else None,
         extremes={k: _vec(v) for k, v in extremes.items()},

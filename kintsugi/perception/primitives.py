@@ -250,63 +250,112 @@ def _good(f: Fit, s: FitSettings) -> bool:
     return f.rms <= s.good_rms and f.inliers >= 0.95
 
 
-def _best(fits: list[Fit]) -> Fit | None:
-    return max(fits, key=lambda f: (round(f.inliers, 2), -f.rms), default=None)
-
-
 I3 = np.eye(3)
+UP = np.array([0.0, 0.0, 1.0])
+Accept = Callable[[Fit], bool]
 
 
-def fit_cylinder(
-    p: np.ndarray, radius: float, half_length: float | None, starts: list[np.ndarray], s: FitSettings
-) -> Fit | None:
-    """Axis and centre of a cylinder of known radius (and half length, if known), from several initial axes."""
-    c0 = p.mean(axis=0)
-    fits: list[Fit] = []
-    for a0 in starts:
+def _cylinder_attempt(p: np.ndarray, radius: float, half_length: float | None, a0: np.ndarray, s: FitSettings):
+    def attempt() -> Fit | None:
         frame0 = _frame_with_z(a0 / np.linalg.norm(a0))
         across = frame0[:, :2]  # rotations about the axis change nothing
+        c0 = p.mean(axis=0)
         if half_length is not None:
             out = _rigid_fit(p, lambda x: cylinder_sdf(x, radius, half_length), c0, frame0, I3, across, s)
         else:  # infinitely long: the centre moves only across the axis, then sits mid-way along the points
             out = _rigid_fit(p, lambda x: cylinder_sdf(x, radius, None), c0, frame0, across, across, s)
         if out is None:
-            continue
+            return None
         c, frame, res = out
         h = half_length
         if h is None:
             t = (p - c) @ frame[:, 2]
             c = c + frame[:, 2] * (t.max() + t.min()) / 2.0
             h = float(t.max() - t.min()) / 2.0
-        fits.append(Fit("cylinder", c, frame, np.array([radius, h, 0.0]), *_quality(res, s)))
-        if _good(fits[-1], s):
-            break
-    return _best(fits)
+        return Fit("cylinder", c, frame, np.array([radius, h, 0.0]), *_quality(res, s))
+
+    return attempt
 
 
-def fit_box(p: np.ndarray, half_extents: np.ndarray, starts: list[np.ndarray], s: FitSettings) -> Fit | None:
-    """Centre and orientation of a box of known half extents, from several initial frames."""
-    c0 = p.mean(axis=0)
-    he = np.asarray(half_extents, float)
+def _box_attempt(p: np.ndarray, he: np.ndarray, r0: np.ndarray, s: FitSettings):
+    def attempt() -> Fit | None:
+        out = _rigid_fit(p, lambda x: box_sdf(x, he), p.mean(axis=0), r0, I3, I3, s)
+        return None if out is None else Fit("box", out[0], out[1], he, *_quality(out[2], s))
+
+    return attempt
+
+
+def _sphere_attempt(p: np.ndarray, radius: float, s: FitSettings):
+    def attempt() -> Fit | None:
+        out = _rigid_fit(p, lambda x: sphere_sdf(x, radius), p.mean(axis=0), I3, I3, np.zeros((3, 0)), s)
+        return None if out is None else Fit("sphere", out[0], I3, np.array([radius, 0.0, 0.0]), *_quality(out[2], s))
+
+    return attempt
+
+
+def fit_primitive(
+    p: np.ndarray, primitive: Primitive, pca_axes: np.ndarray, s: FitSettings, accept: Accept | None = None
+) -> tuple[Fit | None, int]:
+    """Best fit of a known primitive over a few starts, and how many fits `accept` rejected.
+
+    Starts run in order of likelihood and stop at the first clean fit that `accept`
+    (e.g. a check against what the cameras saw) lets through.
+    """
+    if primitive.kind == "cylinder":
+        axes: list[np.ndarray] = []
+        for a in (pca_axes[:, 0], UP, pca_axes[:, 1], pca_axes[:, 2]):
+            if all(abs(a @ b) < 0.95 for b in axes):
+                axes.append(a)
+        attempts = [_cylinder_attempt(p, float(primitive.radius), primitive.half_length, a, s) for a in axes]
+    elif primitive.kind == "box":
+        he = np.asarray(primitive.half_extents, float)
+        attempts = [_box_attempt(p, he, r0, s) for r0 in box_starts(pca_axes, p, he)]
+    elif primitive.kind == "sphere":
+        attempts = [_sphere_attempt(p, float(primitive.radius), s)]
+    else:
+        return None, 0
     fits: list[Fit] = []
-    for r0 in starts:
-        out = _rigid_fit(p, lambda x: box_sdf(x, he), c0, r0, I3, I3, s)
-        if out is None:
+    rejected = 0
+    for attempt in attempts:
+        fit = attempt()
+        if fit is None:
             continue
-        c, frame, res = out
-        fits.append(Fit("box", c, frame, he, *_quality(res, s)))
-        if _good(fits[-1], s):
+        if accept is not None and not accept(fit):
+            rejected += 1
+            continue
+        fits.append(fit)
+        if _good(fit, s):
             break
-    return _best(fits)
+    return max(fits, key=lambda f: (round(f.inliers, 2), -f.rms), default=None), rejected
 
 
-def fit_sphere(p: np.ndarray, radius: float, s: FitSettings) -> Fit | None:
-    """Centre of a sphere of known radius."""
-    out = _rigid_fit(p, lambda x: sphere_sdf(x, radius), p.mean(axis=0), I3, I3, np.zeros((3, 0)), s)
-    if out is None:
-        return None
-    c, _, res = out
-    return Fit("sphere", c, I3, np.array([radius, 0.0, 0.0]), *_quality(res, s))
+def surface_samples(fit: Fit, inset: float) -> np.ndarray:
+    """A fixed set of points on the fitted primitive's surface, moved `inset` inwards (world frame)."""
+    if fit.kind == "sphere":
+        k = np.arange(120) + 0.5
+        z = 1 - 2 * k / 120
+        phi = np.pi * (1 + 5**0.5) * k
+        rho = np.sqrt(1 - z * z)
+        local = (fit.size[0] - inset) * np.column_stack([rho * np.cos(phi), rho * np.sin(phi), z])
+    elif fit.kind == "cylinder":
+        r, h = max(fit.size[0] - inset, 0.0), max(fit.size[1] - inset, 0.0)
+        phi = np.linspace(0, 2 * np.pi, 24, endpoint=False)
+        side = [np.column_stack([r * np.cos(phi), r * np.sin(phi), np.full(24, t)]) for t in np.linspace(-h, h, 7)]
+        caps = [np.column_stack([f * r * np.cos(phi), f * r * np.sin(phi), np.full(24, z)]) for f in (0.5, 1.0) for z in (-h, h)]
+        local = np.vstack(side + caps + [[[0, 0, -h], [0, 0, h]]])
+    else:
+        he = np.maximum(fit.size - inset, 0.0)
+        g = np.linspace(-1, 1, 5)
+        u, v = (a.ravel() for a in np.meshgrid(g, g))
+        faces = []
+        for k in range(3):
+            i, j = [m for m in range(3) if m != k]
+            for sign in (-1.0, 1.0):
+                face = np.zeros((25, 3))
+                face[:, i], face[:, j], face[:, k] = u * he[i], v * he[j], sign * he[k]
+                faces.append(face)
+        local = np.vstack(faces)
+    return fit.centre + local @ fit.frame.T
 
 
 def box_starts(pca_axes: np.ndarray, p: np.ndarray, half_extents: np.ndarray) -> list[np.ndarray]:
