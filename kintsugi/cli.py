@@ -109,7 +109,7 @@ def run(
                                                   "angle, friction); the same seed gives the same trial")] = 0,
     video: Annotated[Optional[Path], typer.Option(help="write an .mp4 or .gif of the scene camera")] = None,
     record: Annotated[Optional[Path], typer.Option(
-        help="trial record .json (default runs/<task>__<method>__<variant>__<condition>__<seed>__<reasoner>.json)")
+        help="trial record .json (default: runs/<key, / as __>__<reasoner>.json)")
     ] = None,
     set_: SetOpt = None,
     reasoner: ReasonerOpt = "embedded",
