@@ -140,24 +140,9 @@ def forward_filter(graph: TaskGraph) -> FilterResult:
         ))
 
     # Recovery nodes that can no longer reach a nominal node through kept recovery edges.
-    alive: set[str] = set()
-    frontier = [e.source for e in graph.edges
-                if e.kind == "recovery" and e.id not in drop_edges and kinds[e.target] == "nominal"
-                and kinds[e.source] == "recovery"]
-    preds: dict[str, list[str]] = {}
-    for e in graph.edges:
-        if e.kind == "recovery" and kinds[e.source] == "recovery" and kinds[e.target] == "recovery":
-            preds.setdefault(e.target, []).append(e.source)
-    while frontier:
-        r = frontier.pop()
-        if r not in alive:
-            alive.add(r)
-            frontier.extend(preds.get(r, ()))
-    dead = {n for n, k in kinds.items() if k == "recovery" and n not in alive}
-    had_merge = {e.source for e in graph.edges if e.kind == "recovery" and kinds[e.target] == "nominal"}
-    for r in sorted(dead):
-        if r in had_merge:
-            continue  # its merge edges were rejected above and say why
+    dead = _dead_recovery_nodes(graph, kinds, drop_edges)
+    never = _dead_recovery_nodes(graph, kinds, set())  # could not merge even before pruning
+    for r in sorted(never):
         u = context_of[r]
         decisions.append(Branch(
             edge=None, context=u, via=r, merge=None,
@@ -176,6 +161,26 @@ def forward_filter(graph: TaskGraph) -> FilterResult:
         rejected=tuple(d for d in decisions if not d.kept),
         cost_to_go=cost_to_go(pruned),
     )
+
+
+def _dead_recovery_nodes(graph: TaskGraph, kinds: dict[str, str], dropped: set[str]) -> set[str]:
+    """Recovery nodes with no path of recovery edges (other than `dropped`) into a nominal node."""
+    alive: set[str] = set()
+    preds: dict[str, list[str]] = {}
+    frontier = []
+    for e in graph.edges:
+        if e.kind != "recovery" or e.id in dropped or kinds[e.source] != "recovery":
+            continue
+        if kinds[e.target] == "nominal":
+            frontier.append(e.source)
+        else:
+            preds.setdefault(e.target, []).append(e.source)
+    while frontier:
+        r = frontier.pop()
+        if r not in alive:
+            alive.add(r)
+            frontier.extend(preds.get(r, ()))
+    return {n for n, k in kinds.items() if k == "recovery" and n not in alive}
 
 
 def _prune(graph: TaskGraph, dead_nodes: set[str], dead_edges: set[str]) -> TaskGraph:

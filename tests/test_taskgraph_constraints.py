@@ -1,0 +1,128 @@
+"""Golden values of every constraint template (Eq. 14-19 and the relational ones) on hand-made features."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import pytest
+from pydantic import TypeAdapter, ValidationError
+
+from kintsugi.taskgraph.constraints import TEMPLATES, Constraint
+from kintsugi.taskgraph.features import ArmState, Features, ObjectState
+
+C = TypeAdapter(Constraint)
+
+
+def make(**data):
+    return C.validate_python(data)
+
+
+@dataclass
+class ForeignObject:
+    """Stands in for perception's ObjectFeatures: numpy arrays and extra attributes."""
+
+    centroid: np.ndarray
+    axis: np.ndarray
+    n_points: int
+    top: np.ndarray
+    upright: bool = True
+
+
+def tilted(deg: float) -> tuple[float, float, float]:
+    r = math.radians(deg)
+    return (0.0, math.sin(r), math.cos(r))
+
+
+F = Features(
+    objects={
+        "cup": ObjectState(centroid=(0.10, 0.0, 0.05), axis=(0.0, 0.0, -1.0), n_points=400),
+        "bottle": ForeignObject(np.array([0.0, 0.0, 0.10]), np.array(tilted(30.0)), 20, np.array([0.0, 0.0, 0.25])),
+    },
+    arms={"right": ArmState(eef=(0.0, 0.0, 0.30), opening=0.004, closed=True, touching=frozenset({"bottle"}))},
+)
+
+GOLDEN = [
+    # Eq. 14: drift of the cup centroid from a reference.
+    ({"kind": "drift", "point": {"entity": "cup"}, "ref": [0.0, 0.0, 0.05], "tol": 0.03}, 0.07),
+    ({"kind": "drift", "point": {"entity": "cup"}, "ref": [0.1, 0.0, 0.9], "tol": 0.03, "axes": "xy"}, -0.03),
+    ({"kind": "drift", "point": {"entity": "cup", "offset": [0.0, 0.0, 0.05]}, "ref": [0.1, 0.0, 0.0], "tol": 0.0}, 0.10),
+    # Eq. 15: angle between principal axis and gravity; the axis has no sign.
+    ({"kind": "upright", "object": "bottle", "tol_deg": 10}, 20.0),
+    ({"kind": "upright", "object": "cup", "tol_deg": 10}, -10.0),
+    ({"kind": "tilted", "object": "bottle", "min_deg": 60}, 30.0),
+    # Eq. 16-17: fingers closed past the object's width; object far from the gripper.
+    ({"kind": "not_grasped", "arm": "right", "min_opening": 0.01}, 0.006),
+    ({"kind": "detached", "arm": "right", "object": "bottle", "tol": 0.08}, 0.12),
+    # Eq. 18: too few points.
+    ({"kind": "visibility", "object": "bottle", "n_min": 50}, 30.0),
+    ({"kind": "visibility", "object": "cup", "n_min": 50}, -350.0),
+    ({"kind": "visibility", "object": "lost", "n_min": 50}, 50.0),
+    # Eq. 19: lateral misalignment (xy by default); near is full 3-D by default.
+    ({"kind": "misaligned", "a": {"entity": "cup"}, "b": {"entity": "bottle"}, "tol": 0.02}, 0.08),
+    ({"kind": "near", "a": {"entity": "cup"}, "b": {"entity": "bottle"}, "tol": 0.02}, math.hypot(0.1, 0.05) - 0.02),
+    ({"kind": "near", "a": {"entity": "right"}, "b": {"entity": "bottle", "feature": "top"}, "tol": 0.0}, 0.05),
+    # above: a at least min_gap over b.
+    ({"kind": "above", "a": {"entity": "right"}, "b": {"entity": "bottle", "feature": "top"}, "min_gap": 0.02}, -0.03),
+    ({"kind": "above", "a": {"entity": "cup"}, "b": {"entity": "bottle"}}, 0.05),
+    # in_region: largest excursion outside the box, negative margin inside.
+    ({"kind": "in_region", "point": {"entity": "cup"}, "lo": [0.0, -0.1, 0.0], "hi": [0.3, 0.1, 0.2]}, -0.05),
+    ({"kind": "in_region", "point": {"entity": "cup"}, "lo": [0.12, -0.1, 0.0], "hi": [0.3, 0.1, 0.2]}, 0.02),
+    ({"kind": "touching", "arm": "right", "object": "bottle"}, -1.0),
+    ({"kind": "touching", "arm": "right", "object": "cup"}, 1.0),
+    ({"kind": "touching", "arm": "right", "object": "bottle", "expect": False}, 1.0),
+]
+
+
+@pytest.mark.parametrize("data,expected", GOLDEN, ids=[f"{d['kind']}-{i}" for i, (d, _) in enumerate(GOLDEN)])
+def test_golden(data, expected):
+    assert make(**data).evaluate(F) == pytest.approx(expected, abs=1e-9)
+
+
+def test_every_template_has_a_golden_case():
+    assert {t.model_fields["kind"].default for t in TEMPLATES} == {d["kind"] for d, _ in GOLDEN}
+
+
+@pytest.mark.parametrize("data", [
+    {"kind": "drift", "point": {"entity": "lost"}, "ref": [0, 0, 0], "tol": 0.1},
+    {"kind": "upright", "object": "lost", "tol_deg": 5},
+    {"kind": "detached", "arm": "left", "object": "cup", "tol": 0.1},
+    {"kind": "misaligned", "a": {"entity": "cup"}, "b": {"entity": "cup", "feature": "missing_attr"}, "tol": 0.1},
+    {"kind": "drift", "point": {"entity": "cup"}, "tol": 0.1},  # ref not latched yet
+])
+def test_missing_inputs_read_nan(data):
+    assert math.isnan(make(**data).evaluate(F))
+
+
+def test_zero_axis_reads_nan():
+    f = Features(objects={"cup": ObjectState(centroid=(0, 0, 0), axis=(0.0, 0.0, 0.0))})
+    assert math.isnan(make(kind="upright", object="cup", tol_deg=5).evaluate(f))
+
+
+def test_drift_latches_reference_at_bind():
+    c = make(kind="drift", point={"entity": "cup"}, tol=0.03)
+    assert not c.bound
+    b = c.bind(F)
+    assert b.bound and b.ref == pytest.approx((0.10, 0.0, 0.05))
+    moved = Features(objects={"cup": ObjectState(centroid=(0.10, 0.05, 0.05))})
+    assert b.evaluate(moved) == pytest.approx(0.02)
+    assert b.bind(moved) is b  # an explicit reference is never overwritten
+
+
+@pytest.mark.parametrize("data", [
+    {"kind": "drift", "point": {"entity": "cup"}, "tol": float("nan")},
+    {"kind": "drift", "point": {"entity": "cup"}, "tol": float("inf")},
+    {"kind": "drift", "point": {"entity": "cup"}, "tol": -0.1},
+    {"kind": "drift", "point": {"entity": "cup"}, "tol": True},
+    {"kind": "drift", "point": {"entity": "cup"}, "tol": "0.1"},
+    {"kind": "drift", "point": {"entity": "cup"}, "tol": 0.1, "code": "import os"},
+    {"kind": "drift", "point": {"entity": "cup", "feature": "__class__"}, "tol": 0.1},
+    {"kind": "upright", "object": "cup", "tol_deg": 0},
+    {"kind": "visibility", "object": "cup", "n_min": 2.5},
+    {"kind": "in_region", "point": {"entity": "cup"}, "lo": [1, 0, 0], "hi": [0, 1, 1]},
+    {"kind": "python", "source": "lambda f: 0"},
+])
+def test_bad_templates_rejected(data):
+    with pytest.raises(ValidationError):
+        make(**data)
