@@ -1,0 +1,105 @@
+"""The full tabletop scene as MJCF: table, two arms, the task's objects, target regions, cameras.
+
+Only the objects a task uses are built (fewer bodies, faster steps). Contact settings
+follow what holds a friction grasp through a lift and a pour in MuJoCo: elliptic cone,
+impratio 10, implicitfast, finger pads with priority 1, condim 4 and friction 1.5, and
+a table with condim 6 rolling friction so that a fallen bottle stops.
+Collision groups: arm links (contype 2) touch the table, objects and pads but never
+each other; objects, pads and the table (contype 1) touch everything.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from kintsugi.tasks.tabletop.arm_model import (
+    arm_actuators_xml,
+    arm_equality_xml,
+    arm_tendon_xml,
+    arm_xml,
+    f,
+)
+from kintsugi.tasks.tabletop.config import ARMS, TabletopConfig
+from kintsugi.tasks.tabletop.objects import object_xml
+
+TABLE_THICK = 0.04
+REGION_RGBA = "0.2 0.8 0.3 0.45"
+CAMERAS = ("top", "front")
+
+
+def _look_at_xyaxes(pos: np.ndarray, target: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Camera x (image right) and y (image up) axes for a camera at `pos` looking at `target`."""
+    back = pos - target
+    back = back / np.linalg.norm(back)
+    right = np.cross(np.array([0.0, 0.0, 1.0]), back)
+    right = right / np.linalg.norm(right)
+    return right, np.cross(back, right)
+
+
+def _cameras(cfg: TabletopConfig) -> str:
+    c = cfg.cameras
+    x, y = _look_at_xyaxes(np.array(c.front_pos_m), np.array(c.front_look_at_m))
+    return (f'<camera name="top" pos="{f(cfg.table.center_x_m, 0, c.top_height_m)}" xyaxes="0 -1 0 1 0 0" '
+            f'fovy="{c.top_fovy_deg:.6g}"/>\n    '
+            f'<camera name="front" pos="{f(*c.front_pos_m)}" xyaxes="{f(*x, *y)}" fovy="{c.front_fovy_deg:.6g}"/>')
+
+
+def _regions(cfg: TabletopConfig, names: Sequence[str]) -> str:
+    out = []
+    for name in names:
+        r = cfg.targets[name]
+        out.append(f'<geom name="target_{name}" type="box" size="{f(*r.half_m, 0.0005)}" '
+                   f'pos="{f(*r.center_m, 0.0006)}" rgba="{REGION_RGBA}" contype="0" conaffinity="0"/>')
+    return "\n    ".join(out)
+
+
+def build_scene_xml(cfg: TabletopConfig, objects: Sequence[str], targets: Sequence[str] = ()) -> str:
+    s, t, r = cfg.sim, cfg.table, cfg.robot
+    solref = f"{s.contact_timeconst_s:.6g} 1"
+    arms = "".join(arm_xml(r, arm) for arm in ARMS)
+    actuators = "\n    ".join(arm_actuators_xml(r, arm) for arm in ARMS)
+    tendons = "\n    ".join(arm_tendon_xml(arm) for arm in ARMS)
+    equalities = "\n    ".join(arm_equality_xml(arm) for arm in ARMS)
+    bodies = "".join(object_xml(kind, cfg.objects) for kind in objects)
+    return f"""
+<mujoco model="tabletop">
+  <compiler angle="radian" autolimits="true"/>
+  <option timestep="{s.timestep_s:.6g}" integrator="implicitfast" cone="elliptic" impratio="{s.impratio:.6g}"
+          solver="Newton" iterations="{s.iterations}" ls_iterations="20" gravity="0 0 -9.81"/>
+  <size memory="16M"/>
+  <visual>
+    <quality offsamples="0" shadowsize="0"/>
+    <global offwidth="{cfg.cameras.width}" offheight="{cfg.cameras.height}"/>
+    <headlight ambient="0.45 0.45 0.45" diffuse="0.55 0.55 0.55" specular="0 0 0"/>
+    <map znear="0.05" zfar="5"/>
+  </visual>
+  <default>
+    <geom solref="{solref}" solimp="0.95 0.99 0.001" condim="3" contype="1" conaffinity="1"/>
+    <default class="link"><geom contype="2" conaffinity="1" rgba="{'0.82 0.83 0.86 1'}"/></default>
+    <default class="visual"><geom contype="0" conaffinity="0" density="0" rgba="0.2 0.2 0.22 1"/></default>
+    <default class="pad">
+      <geom priority="1" condim="4" friction="{r.pad_friction:.6g} {r.pad_torsional_m:.6g} 0.0001"
+            rgba="0.15 0.15 0.15 1"/>
+    </default>
+  </default>
+  <worldbody>
+    {_cameras(cfg)}
+    <geom name="table" type="box" size="{f(*t.half_m, TABLE_THICK / 2)}" pos="{f(t.center_x_m, 0, -TABLE_THICK / 2)}"
+          condim="6" friction="{t.friction:.6g} 0.005 {t.rolling_friction:.6g}" rgba="0.62 0.5 0.38 1"/>
+    {_regions(cfg, targets)}
+    {arms}
+    {bodies}
+  </worldbody>
+  <tendon>
+    {tendons}
+  </tendon>
+  <equality>
+    {equalities}
+  </equality>
+  <actuator>
+    {actuators}
+  </actuator>
+</mujoco>
+"""
