@@ -1,0 +1,89 @@
+"""Where object features come from: the one visible switch between perception and ground truth.
+
+`perception.objects = "perceived"` (default): seg + depth renders of the top and front
+cameras -> fused per-object clouds -> `kintsugi.perception.features` (centroid, PCA
+axis, extremes, uprightness, fitted to the object's known primitive).
+`perception.objects = "truth"`: the same `ObjectFeatures`, computed from the
+simulator's object poses (the paper's simulation setting), marked `note="ground truth"`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from kintsugi.perception.cloud import object_clouds, render_view
+from kintsugi.perception.features import ObjectFeatures, features, sign_normalized
+from kintsugi.perception.primitives import Fit
+from kintsugi.tasks.tabletop.objects import Shape
+from kintsugi.tasks.tabletop.scene import CAMERAS
+from kintsugi.tasks.tabletop.world import GroundTruth, TabletopWorld
+
+UP = np.array([0.0, 0.0, 1.0])
+UPRIGHT_TOL_DEG = 15.0
+
+
+class ObjectPerception:
+    def __init__(self, world: TabletopWorld) -> None:
+        self._world = world
+        self.mode = world.cfg.perception.objects
+        self._geoms = {k: {int(g) for g in np.flatnonzero(world.geom_object == i)} for i, k in enumerate(world.objects)}
+        self._shapes = world.shapes
+
+    def features(self) -> dict[str, ObjectFeatures]:
+        if self.mode == "truth":
+            return truth_features(self._world.ground_truth(), self._shapes)
+        w = self._world
+        views = [render_view(w.renderer, w.data, cam) for cam in CAMERAS]
+        clouds = object_clouds(views, self._geoms)
+        return {k: features(k, clouds[k], self._shapes[k].primitive()) for k in w.objects}
+
+
+def truth_features(truth: GroundTruth, shapes: dict[str, Shape]) -> dict[str, ObjectFeatures]:
+    """ObjectFeatures from the simulator's poses: what perfect perception would report."""
+    out = {}
+    for name, o in truth.objects.items():
+        s = shapes[name]
+        frame = _quat_matrix(np.array(o.quat))
+        centre = np.array(o.pos)
+        if s.kind == "cylinder":
+            size = np.array([s.radius, s.half_height, 0.0])
+            has_axis = True
+        else:
+            size = np.array(s.half_extents)
+            a, b = np.sort(size)[::-1][:2]
+            has_axis = a >= 1.3 * b
+        fit = Fit(kind=s.kind, centre=centre, frame=frame, size=size, rms=0.0, inliers=1.0)
+        axis = sign_normalized(fit.axis)
+        h = fit.half_length
+        tilt = math.degrees(math.acos(float(np.clip(axis[2], -1.0, 1.0))))
+        spans = _spans(s)
+        out[name] = ObjectFeatures(
+            name=name, visible=True, n_points=0, fit="primitive", note="ground truth",
+            centroid=_v(centre), raw_centroid=_v(centre), axis=_v(axis), extent=spans,
+            tilt_deg=tilt if has_axis else None, upright=(tilt <= UPRIGHT_TOL_DEG) if has_axis else None,
+            extremes={"top": _v(fit.support(UP)), "bottom": _v(fit.support(-UP)),
+                      "axis_pos": _v(centre + h * axis), "axis_neg": _v(centre - h * axis)},
+        )
+    return out
+
+
+def _spans(s: Shape) -> tuple[float, float, float]:
+    if s.kind == "cylinder":
+        return (2 * s.half_height, 2 * s.radius, 2 * s.radius)
+    he = sorted(s.half_extents, reverse=True)
+    return (2 * he[0], 2 * he[1], 2 * he[2])
+
+
+def _quat_matrix(q: np.ndarray) -> np.ndarray:
+    w, x, y, z = q / np.linalg.norm(q)
+    return np.array([
+        [1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+        [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+        [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)],
+    ])
+
+
+def _v(a: np.ndarray) -> tuple[float, float, float]:
+    return (float(a[0]), float(a[1]), float(a[2]))

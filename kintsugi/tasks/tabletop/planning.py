@@ -1,0 +1,216 @@
+"""Atomic action -> per-arm motion program, with every IK target solved before anything moves.
+
+Targets come from what the robot perceives (object features) and its own commanded
+pose. Straight-line segments (grasp approach, lift, lowering, retreat, rotations) are
+split into short Cartesian steps, each an IK solution seeded by the previous one;
+`move_to_obj`, `move_to_target` and `back` interpolate in joint space, as the paper does.
+An unreachable target makes the whole action fail with `PlanError` (ik_failed).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial.transform import Rotation, Slerp
+
+from kintsugi.errors import KintsugiError
+from kintsugi.perception.features import ObjectFeatures
+from kintsugi.tasks.tabletop import actions as A
+from kintsugi.tasks.tabletop.arm_model import PAD_HALF
+from kintsugi.tasks.tabletop.config import TabletopConfig
+from kintsugi.tasks.tabletop.ik import ArmIK
+from kintsugi.tasks.tabletop.motion import Grip, Move, Step
+from kintsugi.tasks.tabletop.objects import Shape
+
+LINEAR_STEP_M = 0.015
+LINEAR_STEP_RAD = math.radians(10.0)
+TABLE_CLEARANCE_M = 0.004
+"""Finger tips stay this far above the table when grasping low objects."""
+FLAT_TILT_DEG = 45.0
+AXES = {"normal": 0, "closing": 1, "approach": 2}
+
+
+class PlanError(KintsugiError):
+    """An action cannot be carried out (unreachable pose, object not visible); nothing moved."""
+
+    def __init__(self, message: str, ik_failed: bool = False, clipped: bool = False) -> None:
+        super().__init__(message)
+        self.ik_failed = ik_failed
+        self.clipped = clipped
+
+
+@dataclass
+class ArmView:
+    """What planning knows about one arm: its commanded joints and their tool pose, and touch."""
+
+    q: np.ndarray
+    pos: np.ndarray
+    rot: np.ndarray
+    base: np.ndarray
+    touching: dict[str, int]
+
+
+def side_rotation(yaw: float) -> np.ndarray:
+    """Gripper horizontal, approaching along `yaw`, fingers closing horizontally (a side grasp)."""
+    return Rotation.from_euler("zy", [yaw, math.pi / 2]).as_matrix()
+
+
+def down_rotation(yaw: float) -> np.ndarray:
+    """Gripper pointing down; its closing axis is horizontal, perpendicular to direction `yaw`."""
+    return Rotation.from_euler("zy", [yaw, math.pi]).as_matrix()
+
+
+def rpy_matrix(rpy_deg: tuple[float, float, float]) -> np.ndarray:
+    return Rotation.from_euler("xyz", rpy_deg, degrees=True).as_matrix()
+
+
+def _wrap_half_turn(a: float) -> float:
+    """Angle modulo pi into [-pi/2, pi/2) (a parallel gripper is symmetric under a half turn)."""
+    return (a + math.pi / 2) % math.pi - math.pi / 2
+
+
+class Planner:
+    def __init__(self, cfg: TabletopConfig, iks: dict[str, ArmIK], shapes: dict[str, Shape]) -> None:
+        self.cfg = cfg
+        self.iks = iks
+        self.shapes = shapes
+        self.clipped = False
+
+    # --- IK helpers -----------------------------------------------------------
+    def _solve(self, arm: str, pos: np.ndarray, rot: np.ndarray, seed: np.ndarray, what: str) -> np.ndarray:
+        r = self.iks[arm].solve(pos, rot, seed)
+        self.clipped |= r.clipped
+        if not r.ok:
+            raise PlanError(f"{arm} arm cannot reach {what} at ({', '.join(f'{v:.3f}' for v in pos)}): "
+                            f"{r.message()}", ik_failed=True, clipped=r.clipped)
+        return r.q
+
+    def _linear(self, arm: str, start: tuple[np.ndarray, np.ndarray], goal: tuple[np.ndarray, np.ndarray],
+                seed: np.ndarray, what: str, label: str) -> Move:
+        """A straight-line move with slerped orientation, as IK waypoints."""
+        p0, r0 = start
+        p1, r1 = goal
+        angle = Rotation.from_matrix(r0.T @ r1).magnitude()
+        dist = float(np.linalg.norm(p1 - p0))
+        n = max(1, math.ceil(dist / LINEAR_STEP_M), math.ceil(angle / LINEAR_STEP_RAD))
+        slerp = Slerp([0.0, 1.0], Rotation.from_matrix(np.stack([r0, r1])))
+        qs, q = [], seed
+        for i in range(1, n + 1):
+            s = i / n
+            q = self._solve(arm, p0 + s * (p1 - p0), slerp(s).as_matrix(), q, what)
+            qs.append(q)
+        m = self.cfg.motion
+        duration = max(dist / m.linear_speed_m_s, math.degrees(angle) / m.rotate_speed_deg_s)
+        return Move(qs, min_duration_s=duration, tcp=(p1, r1), label=label)
+
+    def _joint(self, arm: str, pos: np.ndarray, rot: np.ndarray, seed: np.ndarray, what: str, label: str) -> Move:
+        return Move([self._solve(arm, pos, rot, seed, what)], tcp=(pos, rot), label=label)
+
+    # --- object frames ----------------------------------------------------------
+    @staticmethod
+    def _visible(obj: str, f: ObjectFeatures | None) -> ObjectFeatures:
+        if f is None or not f.visible or f.centroid is None:
+            note = f" ({f.note})" if f is not None and f.note else ""
+            raise PlanError(f"{obj} is not visible to the cameras{note}")
+        return f
+
+    @staticmethod
+    def object_frame(f: ObjectFeatures) -> np.ndarray:
+        """z up; x along the principal axis when it lies flat (a fork, a fallen bottle), else world x."""
+        axis = np.array(f.axis if f.axis is not None else (1.0, 0.0, 0.0))
+        flat = f.tilt_deg is not None and f.tilt_deg > FLAT_TILT_DEG and np.hypot(axis[0], axis[1]) > 1e-6
+        x = np.array([axis[0], axis[1], 0.0]) / np.hypot(axis[0], axis[1]) if flat else np.array([1.0, 0.0, 0.0])
+        z = np.array([0.0, 0.0, 1.0])
+        return np.column_stack([x, np.cross(z, x), z])
+
+    # --- actions ---------------------------------------------------------------
+    def plan(self, action: object, arm: ArmView, feats: dict[str, ObjectFeatures] | None) -> list[Step]:
+        """Program for one single-arm action. `feats` is None when the action needs no perception."""
+        name = action.action  # type: ignore[attr-defined]
+        return getattr(self, f"_{name}")(action, arm, feats or {})
+
+    def _open_gripper(self, a: A.OpenGripper, arm: ArmView, feats: dict) -> list[Step]:
+        return [Grip(False, "open")]
+
+    def _close_gripper(self, a: A.CloseGripper, arm: ArmView, feats: dict) -> list[Step]:
+        return [Grip(True, "close")]
+
+    def _back(self, a: A.Back, arm: ArmView, feats: dict) -> list[Step]:
+        home = self.iks[a.arm].home
+        return [Move([home.copy()], tcp=self.iks[a.arm].fk(home), label="home")]
+
+    def _move_to_target(self, a: A.MoveToTarget, arm: ArmView, feats: dict) -> list[Step]:
+        rot = rpy_matrix(a.rpy_deg) if a.rpy_deg is not None else arm.rot
+        return [self._joint(a.arm, np.array(a.xyz), rot, arm.q, "the target", "to target")]
+
+    def _move_to_obj(self, a: A.MoveToObj, arm: ArmView, feats: dict) -> list[Step]:
+        f = self._visible(a.obj, feats.get(a.obj))
+        pos = np.array(f.centroid) + self.object_frame(f) @ np.array(a.offset)
+        rot = rpy_matrix(a.rpy_deg) if a.rpy_deg is not None else arm.rot
+        return [self._joint(a.arm, pos, rot, arm.q, f"the pose at {a.obj}", f"to {a.obj}")]
+
+    def _move_by_offset(self, a: A.MoveByOffset, arm: ArmView, feats: dict) -> list[Step]:
+        turn = rpy_matrix(a.drpy_deg)
+        if a.frame == "world":
+            pos, rot = arm.pos + np.array(a.dxyz), turn @ arm.rot
+        else:
+            pos, rot = arm.pos + arm.rot @ np.array(a.dxyz), arm.rot @ turn
+        return [self._linear(a.arm, (arm.pos, arm.rot), (pos, rot), arm.q, "the offset pose", "offset")]
+
+    def _rotate_eef(self, a: A.RotateEef, arm: ArmView, feats: dict) -> list[Step]:
+        axis = np.zeros(3)
+        axis[AXES[a.axis]] = 1.0
+        rot = arm.rot @ Rotation.from_rotvec(math.radians(a.angle_deg) * axis).as_matrix()
+        return [self._linear(a.arm, (arm.pos, arm.rot), (arm.pos, rot), arm.q, "the rotated pose", "rotate")]
+
+    def _grasp(self, a: A.Grasp, arm: ArmView, feats: dict) -> list[Step]:
+        f = self._visible(a.obj, feats.get(a.obj))
+        shape = self.shapes[a.obj]
+        c = np.array(f.centroid)
+        if a.grasp_offset is not None:
+            c = c + self.object_frame(f) @ np.array(a.grasp_offset)
+        radial = math.atan2(c[1] - arm.base[1], c[0] - arm.base[0])
+        if shape.grasp == "side_if_upright" and f.upright:
+            rot = side_rotation(radial)
+            c[2] = max(c[2], PAD_HALF[0] + TABLE_CLEARANCE_M)
+            style = "side-on (upright)"
+        else:
+            yaw = radial
+            if f.tilt_deg is not None and f.axis is not None and f.tilt_deg > FLAT_TILT_DEG:
+                along = math.atan2(f.axis[1], f.axis[0])  # close across the principal axis
+                yaw = radial + _wrap_half_turn(along - radial)
+            rot = down_rotation(yaw)
+            c[2] = max(c[2], PAD_HALF[2] + TABLE_CLEARANCE_M)
+            style = "top-down" + (" (fallen)" if shape.grasp == "side_if_upright" else "")
+        approach = rot[:, 2]
+        pre = c - a.pre_grasp_offset * approach
+        q_pre = self._solve(a.arm, pre, rot, arm.q, f"the pre-grasp pose of {a.obj}")
+        return [
+            Grip(False, "open"),
+            Move([q_pre], tcp=(pre, rot), label=f"pre-grasp {a.obj} {style}"),
+            self._linear(a.arm, (pre, rot), (c, rot), q_pre, f"the grasp pose of {a.obj}", f"approach {a.obj}"),
+            Grip(True, "close"),
+        ]
+
+    def _place(self, a: A.Place, arm: ArmView, feats: dict) -> list[Step]:
+        held = [k for k, n in arm.touching.items() if n == 2]
+        table_z = 0.0
+        if held:
+            f = self._visible(held[0], feats.get(held[0]))
+            below = arm.pos[2] - f.extremes["bottom"][2]  # tool centre point above the object's bottom
+            shift = arm.pos[:2] - np.array(f.centroid[:2])
+        else:
+            below = PAD_HALF[2]
+            shift = np.zeros(2)
+        rot = arm.rot
+        low = np.array([a.x + shift[0], a.y + shift[1], table_z + below + a.z_offset + 0.003])
+        over = low.copy()
+        over[2] = max(arm.pos[2], low[2] + 0.05)
+        q_over = self._solve(a.arm, over, rot, arm.q, "the pose over the place")
+        lower = self._linear(a.arm, (over, rot), (low, rot), q_over, "the place pose", "lower")
+        retreat_pos = low - self.cfg.motion.retreat_m * rot[:, 2]
+        retreat = self._linear(a.arm, (low, rot), (retreat_pos, rot), lower.waypoints[-1], "the retreat pose",
+                               "retreat")
+        return [Move([q_over], tcp=(over, rot), label="over place"), lower, Grip(False, "release"), retreat]

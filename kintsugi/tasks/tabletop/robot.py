@@ -1,0 +1,162 @@
+"""The robot as a method sees it: atomic actions in, observations out.
+
+Methods and reasoners get a `TabletopRobot`, never the world: ground truth (where
+objects really are) is not reachable from here. Object features come from
+`ObjectPerception` (perceived from renders, or ground truth only when the config's
+`perception.objects` says "truth" - the switch lives in perceive.py and is recorded
+in every observation's `features_source`).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Literal, Protocol
+
+import cv2
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from kintsugi.config import StrictModel
+from kintsugi.perception.features import ObjectFeatures
+from kintsugi.tasks.tabletop.actions import Drive, parse_action
+from kintsugi.tasks.tabletop.arm_model import base_position
+from kintsugi.tasks.tabletop.config import ARMS
+from kintsugi.tasks.tabletop.ik import ArmIK
+from kintsugi.tasks.tabletop.motion import planned_duration, run_programs
+from kintsugi.tasks.tabletop.perceive import ObjectPerception
+from kintsugi.tasks.tabletop.planning import ArmView, Planner, PlanError
+from kintsugi.tasks.tabletop.scene import CAMERAS
+from kintsugi.tasks.tabletop.world import TabletopWorld
+
+Vec3 = tuple[float, float, float]
+NEEDS_FEATURES = ("grasp", "move_to_obj", "place")
+
+
+class ArmState(StrictModel):
+    """One arm as its own sensors report it (joint encoders, gripper, finger-pad touch)."""
+
+    joints_deg: tuple[float, ...]
+    tcp_pos: Vec3
+    tcp_rpy_deg: Vec3
+    """Extrinsic x-y-z angles of the gripper frame (z = approach, y = closing axis)."""
+    gripper_opening_m: float
+    gripper_closed: bool
+    """The commanded state (the paper's binary open/closed feature)."""
+    touching: dict[str, int]
+    """Objects touching the finger pads -> how many of the two pads touch each."""
+    pad_force_n: float
+
+
+class Observation(StrictModel):
+    """Everything a method may know at one instant: images, perceived objects, the arms."""
+
+    t: float
+    features_source: Literal["perceived", "truth"]
+    objects: dict[str, ObjectFeatures]
+    arms: dict[str, ArmState]
+    images_png: dict[str, bytes]
+    """RGB of each camera (top, front) as PNG; empty when not requested."""
+
+
+class ActionResult(StrictModel):
+    action: str
+    arms: tuple[str, ...]
+    reached: bool
+    """Every move of the action ended at its target (within motion.reach_tol_*), settled."""
+    ik_failed: bool = False
+    clipped: bool = False
+    steps: int = 0
+    sim_time: float = 0.0
+    pos_err_m: float = 0.0
+    rot_err_deg: float = 0.0
+    message: str = ""
+
+
+class ActionHook(Protocol):
+    def begin_action(self, planned_s: float, arms: tuple[str, ...]) -> None: ...
+
+
+def png(image: np.ndarray) -> bytes:
+    ok, buf = cv2.imencode(".png", cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
+    if not ok:
+        raise ValueError("could not encode a camera image as PNG")
+    return buf.tobytes()
+
+
+class TabletopRobot:
+    def __init__(self, world: TabletopWorld, hook: ActionHook | None = None,
+                 on_tick: Callable[[], None] | None = None) -> None:
+        self._world = world
+        self._hook = hook
+        self._on_tick = on_tick
+        cfg = world.cfg
+        self._motion = cfg.motion
+        self._iks = {arm: ArmIK(cfg.robot, cfg.motion, arm) for arm in ARMS}
+        self._planner = Planner(cfg, self._iks, world.shapes)
+        self._perception = ObjectPerception(world)
+        self.objects: tuple[str, ...] = world.objects
+        self.features_source = self._perception.mode
+        self.bases = {arm: np.array(base_position(cfg.robot, arm)) for arm in ARMS}
+        self.last_action = ""
+
+    @property
+    def sim_time(self) -> float:
+        return float(self._world.data.time)
+
+    # --- sensing ------------------------------------------------------------------
+    def features(self) -> dict[str, ObjectFeatures]:
+        return self._perception.features()
+
+    def arm_state(self, arm: str) -> ArmState:
+        w = self._world
+        pos, rot = w.tcp_pose(arm)
+        touching, force = w.pad_contacts(arm)
+        return ArmState(
+            joints_deg=tuple(round(float(v), 3) for v in np.degrees(w.joint_positions(arm))),
+            tcp_pos=tuple(float(v) for v in pos),
+            tcp_rpy_deg=tuple(float(v) for v in Rotation.from_matrix(rot).as_euler("xyz", degrees=True)),
+            gripper_opening_m=w.gripper_opening(arm), gripper_closed=w.gripper_commanded_closed(arm),
+            touching=touching, pad_force_n=force)
+
+    def observation(self, images: bool = True) -> Observation:
+        return Observation(
+            t=self.sim_time, features_source=self.features_source, objects=self.features(),
+            arms={arm: self.arm_state(arm) for arm in ARMS},
+            images_png={c: png(self._world.render(c)) for c in CAMERAS} if images else {})
+
+    def image(self, camera: str) -> np.ndarray:
+        return self._world.render(camera)
+
+    # --- acting -------------------------------------------------------------------
+    def execute(self, action: dict[str, Any] | Any) -> ActionResult:
+        """Validate, plan (all IK up front), then move. Bad input raises ActionError before any motion;
+        an unreachable target returns ik_failed=True without moving."""
+        if isinstance(action, dict):
+            action = parse_action(action, self.objects)
+        parts = [a for a in (action.left, action.right) if a is not None] if isinstance(action, Drive) else [action]
+        arms = tuple(p.arm for p in parts)
+        self.last_action = action.action
+        steps0, t0 = self._world.steps, self.sim_time
+        feats = self.features() if any(p.action in NEEDS_FEATURES for p in parts) else None
+        self._planner.clipped = False
+        try:
+            programs = {p.arm: self._planner.plan(p, self._arm_view(p.arm), feats) for p in parts}
+        except PlanError as exc:
+            return ActionResult(action=action.action, arms=arms, reached=False, ik_failed=exc.ik_failed,
+                                clipped=exc.clipped, message=str(exc))
+        if self._hook is not None:
+            planned = max(planned_duration(s, self._world.joint_targets(a), self._motion) for a, s in programs.items())
+            self._hook.begin_action(planned, arms)
+        reports = run_programs(self._world, programs, self._motion, self._on_tick)
+        pos_err = max((r.pos_err_m for rs in reports.values() for r in rs), default=0.0)
+        rot_err = max((r.rot_err_deg for rs in reports.values() for r in rs), default=0.0)
+        settled = all(r.settled for rs in reports.values() for r in rs)
+        reached = settled and pos_err <= self._motion.reach_tol_m and rot_err <= self._motion.reach_tol_deg
+        msg = f"pose error {pos_err * 1000:.1f} mm, {rot_err:.1f} deg" + ("" if settled else ", not settled")
+        return ActionResult(action=action.action, arms=arms, reached=reached, clipped=self._planner.clipped,
+                            steps=self._world.steps - steps0, sim_time=self.sim_time - t0, pos_err_m=pos_err,
+                            rot_err_deg=rot_err, message=msg)
+
+    def _arm_view(self, arm: str) -> ArmView:
+        q = self._world.joint_targets(arm)
+        pos, rot = self._iks[arm].fk(q)
+        return ArmView(q=q, pos=pos, rot=rot, base=self.bases[arm], touching=self._world.pad_contacts(arm)[0])
