@@ -26,6 +26,7 @@ from kintsugi.perception.features import (
     features,
     object_cloud,
     object_clouds,
+    SegDepthRenderer,
     render_view,
     see_through,
 )
@@ -128,6 +129,19 @@ def test_cloud_lies_on_the_true_surface(scene: Scene) -> None:
     assert side.sum() > 300
     # MuJoCo draws a cylinder as a polygon, so side points sit slightly inside the true radius.
     assert np.all(np.abs(radial[side] - 0.035) < 1.5e-3)
+
+
+def test_one_pass_renderer_matches_mujoco_renderer(scene: Scene) -> None:
+    with SegDepthRenderer(scene.model, W, H) as renderer:
+        for two_pass, cam in zip(scene.views, ("top", "front")):
+            one_pass = render_view(renderer, scene.data, cam)
+            assert np.array_equal(one_pass.seg, two_pass.seg)
+            assert np.array_equal(one_pass.depth, two_pass.depth)
+            assert np.array_equal(one_pass.camera.xmat, two_pass.camera.xmat)
+    with pytest.raises(ConfigError, match="after close"):
+        renderer.view(scene.data, "top")
+    with pytest.raises(ConfigError, match="offscreen buffer"):
+        SegDepthRenderer(scene.model, 2 * W, H)
 
 
 # --- features on the rendered scene -------------------------------------------------------

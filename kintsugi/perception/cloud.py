@@ -130,22 +130,6 @@ def camera_id(model: mujoco.MjModel, camera: str | int) -> int:
     return cam_id
 
 
-def render_view(renderer: mujoco.Renderer, data: mujoco.MjData, camera: str | int) -> View:
-    """Render segmentation and depth of one camera (one scene update, two passes) with its calibration."""
-    model = renderer.model
-    cam = CameraModel.from_mujoco(model, data, camera, renderer.width, renderer.height)
-    renderer.update_scene(data, camera_id(model, camera))
-    try:
-        renderer.enable_segmentation_rendering()
-        seg = renderer.render()
-        renderer.enable_depth_rendering()
-        depth = renderer.render()
-    finally:
-        renderer.disable_depth_rendering()
-        renderer.disable_segmentation_rendering()
-    return View(cam, depth, seg)
-
-
 def body_geom_ids(model: mujoco.MjModel, body: str | int) -> set[int]:
     """Geom ids of a body and of every body below it (what a segmentation mask of that object shows)."""
     root = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, body) if isinstance(body, str) else int(body)
@@ -190,29 +174,38 @@ def object_clouds(
             if lut[i + 1] >= 0:
                 raise ConfigError(f"id {i} belongs to both {names[lut[i + 1]]!r} and {name!r}")
             lut[i + 1] = k
-    parts: list[list[np.ndarray]] = [[] for _ in names]
-    for cam, depth, seg in views:
-        ids = _object_ids(seg, (cam.height, cam.width), objtype)
-        depth = cam._check_depth(depth)
+    # Pass 1: each object's pixels (flat indices, raster order) per view; the small-int stable sort is a radix sort.
+    pixels: list[list[tuple[int, np.ndarray]]] = [[] for _ in names]
+    for v, (cam, depth, seg) in enumerate(views):
+        cam._check_depth(depth)
+        ids = _object_ids(seg, (cam.height, cam.width), objtype).ravel()
         owner = lut[np.clip(ids, -1, lut_size - 1) + 1]
         owner[ids >= lut_size] = -1
-        rows, cols = np.nonzero(owner >= 0)
-        if rows.size == 0:
+        flat = np.flatnonzero(owner >= 0)
+        if flat.size == 0:
             continue
-        pts = cam.points_at(depth, rows, cols)
-        who = owner[rows, cols]
+        who = owner[flat].astype(np.int16 if len(names) < 2**15 else np.int64)
         order = np.argsort(who, kind="stable")
         bounds = np.searchsorted(who[order], np.arange(len(names) + 1))
         for k in range(len(names)):
             if bounds[k + 1] > bounds[k]:
-                parts[k].append(pts[order[bounds[k] : bounds[k + 1]]])
+                pixels[k].append((v, flat[order[bounds[k] : bounds[k + 1]]]))
+    # Pass 2: thin each object's pixels evenly over all its views, then back-project only those.
     out: dict[str, np.ndarray] = {}
     for k, name in enumerate(names):
-        cloud = np.concatenate(parts[k]) if parts[k] else np.empty((0, 3))
-        cloud = cloud[np.isfinite(cloud).all(axis=1)]
-        if len(cloud) > max_points:
-            cloud = cloud[np.linspace(0, len(cloud) - 1, max_points).round().astype(np.int64)]
-        out[name] = cloud
+        total = sum(len(f) for _, f in pixels[k])
+        keep = np.linspace(0, total - 1, max_points).round().astype(np.int64) if total > max_points else None
+        parts, start = [], 0
+        for v, f in pixels[k]:
+            if keep is not None:
+                mine = keep[(keep >= start) & (keep < start + len(f))] - start
+                start += len(f)
+                f = f[mine]
+            cam, depth, _ = views[v]
+            rows, cols = np.divmod(f, cam.width)
+            parts.append(cam.points_at(np.asarray(depth), rows, cols))
+        cloud = np.concatenate(parts) if parts else np.empty((0, 3))
+        out[name] = cloud[np.isfinite(cloud).all(axis=1)]
     return out
 
 

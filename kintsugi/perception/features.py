@@ -17,7 +17,8 @@ from pydantic import Field
 
 from kintsugi.config import StrictModel
 from kintsugi.errors import ConfigError
-from kintsugi.perception.cloud import CameraModel, View, body_geom_ids, object_cloud, object_clouds, render_view
+from kintsugi.perception.cloud import CameraModel, View, body_geom_ids, object_cloud, object_clouds
+from kintsugi.perception.render import SegDepthRenderer, render_view
 from kintsugi.perception.primitives import Fit, FitSettings, Primitive, fit_primitive, surface_samples
 
 __all__ = [
@@ -25,6 +26,7 @@ __all__ = [
     "FeatureConfig",
     "ObjectFeatures",
     "Primitive",
+    "SegDepthRenderer",
     "View",
     "body_geom_ids",
     "features",
