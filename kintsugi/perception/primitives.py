@@ -8,6 +8,7 @@ to the primitive's surface (scipy least_squares, robust loss, a few starts).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Callable, Literal
 
@@ -17,6 +18,7 @@ from scipy.optimize import least_squares
 
 from kintsugi.config import StrictModel
 
+I3 = np.eye(3)
 DEADZONE = float(np.sin(np.radians(5.0)))  # a direction within 5 deg of a face/axis counts as along it
 
 
@@ -123,20 +125,20 @@ def _skew(w: np.ndarray) -> np.ndarray:
 
 def _exp(w: np.ndarray) -> np.ndarray:
     """Rotation matrix of a rotation vector (Rodrigues)."""
-    theta = float(np.linalg.norm(w))
+    theta = math.sqrt(float(w @ w))
     if theta < 1e-12:
-        return np.eye(3) + _skew(w)
+        return I3 + _skew(w)
     k = _skew(w / theta)
-    return np.eye(3) + np.sin(theta) * k + (1.0 - np.cos(theta)) * (k @ k)
+    return I3 + math.sin(theta) * k + (1.0 - math.cos(theta)) * (k @ k)
 
 
 def _left_jacobian(w: np.ndarray) -> np.ndarray:
     """d exp(w) = exp(J_l(w) dw) exp(w): maps a rotation-vector change to a world-frame rotation."""
-    theta = float(np.linalg.norm(w))
+    theta = math.sqrt(float(w @ w))
     k = _skew(w)
     if theta < 1e-6:
-        return np.eye(3) + 0.5 * k
-    return np.eye(3) + (1 - np.cos(theta)) / theta**2 * k + (theta - np.sin(theta)) / theta**3 * (k @ k)
+        return I3 + 0.5 * k
+    return I3 + (1 - math.cos(theta)) / theta**2 * k + (theta - math.sin(theta)) / theta**3 * (k @ k)
 
 
 # Signed distance and its gradient, for points in the primitive's own frame.
@@ -229,7 +231,10 @@ def _rigid_fit(
 
     def jac(x: np.ndarray) -> np.ndarray:
         _, d, g, v, z, root = evaluate(x)
-        j = np.hstack([-g @ tc, np.cross(g, v) @ (_left_jacobian(tr @ x[nt:]) @ tr)])
+        g_x_v = np.column_stack(
+            [g[:, 1] * v[:, 2] - g[:, 2] * v[:, 1], g[:, 2] * v[:, 0] - g[:, 0] * v[:, 2], g[:, 0] * v[:, 1] - g[:, 1] * v[:, 0]]
+        )
+        j = np.hstack([-g @ tc, g_x_v @ (_left_jacobian(tr @ x[nt:]) @ tr)])
         scale = np.where(root > 1e-12, np.abs(d) / (z * np.maximum(root, 1e-300)), 1.0)  # d root / d residual
         return j * scale[:, None]
 
@@ -250,7 +255,6 @@ def _good(f: Fit, s: FitSettings) -> bool:
     return f.rms <= s.good_rms and f.inliers >= 0.95
 
 
-I3 = np.eye(3)
 UP = np.array([0.0, 0.0, 1.0])
 Accept = Callable[[Fit], bool]
 
@@ -302,8 +306,10 @@ def fit_primitive(
     (e.g. a check against what the cameras saw) lets through.
     """
     if primitive.kind == "cylinder":
+        squat = primitive.half_length is not None and primitive.half_length < primitive.radius
+        likely = (pca_axes[:, 2], UP, pca_axes[:, 0]) if squat else (pca_axes[:, 0], UP, pca_axes[:, 1], pca_axes[:, 2])
         axes: list[np.ndarray] = []
-        for a in (pca_axes[:, 0], UP, pca_axes[:, 1], pca_axes[:, 2]):
+        for a in likely:  # a squat cylinder (plate, cup) is thinnest along its axis, a long one longest
             if all(abs(a @ b) < 0.95 for b in axes):
                 axes.append(a)
         attempts = [_cylinder_attempt(p, float(primitive.radius), primitive.half_length, a, s) for a in axes]
