@@ -31,8 +31,6 @@ class PegRobot:
         self.calibration: CameraCalibration = world.calibration()
         self.shape = shape
         self.skill_axes = {name: list(spec.axes) for name, spec in SKILLS.items()}
-        self.wrist_stiffness_n_per_mm = self._cfg.wrist.z_stiffness / 1000.0
-        self.compression_limit_mm = self._cfg.control.compression_limit_mm
         self.current_skill = ""
         self.status = ""
 
