@@ -175,6 +175,7 @@ def test_extremes(scene: Scene) -> None:
     assert np.allclose(bottle.extremes["top"], centre + [0, 0, 0.11], atol=2e-3)  # the cap's centre
     assert np.allclose(bottle.extremes["bottom"], centre - [0, 0, 0.11], atol=2e-3)
     assert np.allclose(bottle.extremes["axis_pos"], bottle.extremes["top"], atol=1e-9)
+    assert np.allclose(bottle.along(0.75), centre + [0, 0, 0.055], atol=2e-3)  # three quarters up the bottle
     lying = scene.feats["lying"]
     centre, axis = scene.truth("lying")
     ends = sorted([lying.extremes["axis_pos"], lying.extremes["axis_neg"]])
@@ -240,6 +241,8 @@ def test_invisible_object_is_not_a_crash(scene: Scene) -> None:
     assert len(scene.clouds["hidden"]) == 0
     f = features("hidden", scene.clouds["hidden"], Primitive.sphere(0.03))
     assert not f.visible and f.n_points == 0 and f.centroid is None and f.axis is None and f.extremes == {}
+    with pytest.raises(ConfigError, match="not visible"):
+        f.along(0.5)
     assert not features("x", np.empty((0, 3))).visible
     assert not object_cloud(scene.views, {12345}).size
 
@@ -283,6 +286,20 @@ def test_bad_inputs_name_the_problem(scene: Scene) -> None:
         Primitive(kind="box", half_extents=(0.1, 0.1, 0.1), radius=0.1)
     with pytest.raises(ValidationError):
         Primitive(kind="cone", radius=0.1)
+
+
+def test_body_geom_ids_include_child_bodies() -> None:
+    model = mujoco.MjModel.from_xml_string(
+        '<mujoco><worldbody><geom name="floor" type="plane" size="1 1 .1"/>'
+        '<body name="tray"><geom name="base" size=".1 .1 .01" type="box"/>'
+        '<body name="handle"><geom name="h" size=".01"/></body></body>'
+        '<body name="cup"><geom name="c" size=".03"/></body></worldbody></mujoco>'
+    )
+    gid = lambda n: mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_GEOM, n)  # noqa: E731
+    assert body_geom_ids(model, "tray") == {gid("base"), gid("h")}
+    assert body_geom_ids(model, "cup") == {gid("c")}
+    with pytest.raises(UnknownNameError, match="mug"):
+        body_geom_ids(model, "mug")
 
 
 def test_unsupported_cameras_are_refused() -> None:

@@ -59,7 +59,8 @@ class FeatureConfig(StrictModel):
 class ObjectFeatures(StrictModel):
     """What a method may know about one object, from its perceived cloud (metres, world frame).
 
-    `axis` is the principal axis, unit, sign-normalised so that z >= 0 (horizontal: x >= 0).
+    `axis` is the principal axis (a fitted cylinder's axis, a box's longest side), unit,
+    pointing up; within 2 deg of horizontal it points to +x (then +y) instead.
     `extremes`: `top` / `bottom` (centre of the highest / lowest face, edge or point) and
     `axis_pos` / `axis_neg` (the two ends along `axis`). Fields other than name, visible,
     n_points, fit and note are None when the object is not visible.
@@ -79,6 +80,13 @@ class ObjectFeatures(StrictModel):
     tilt_deg: float | None = None  # angle between axis and vertical, 0..90
     upright: bool | None = None  # None when the object has no well-defined axis
     extremes: dict[str, Vec3] = Field(default_factory=dict)
+
+    def along(self, fraction: float) -> Vec3:
+        """The point a fraction of the way from `axis_neg` (0) to `axis_pos` (1), e.g. 0.75 up a bottle."""
+        if not self.visible:
+            raise ConfigError(f"object {self.name!r} is not visible: it has no points along its axis")
+        a, b = np.array(self.extremes["axis_neg"]), np.array(self.extremes["axis_pos"])
+        return _vec(a + fraction * (b - a))
 
 
 def _vec(v: np.ndarray) -> Vec3:
@@ -206,7 +214,7 @@ def features(
     across = p - np.outer(p @ axis, axis)
     others = _principal(across)[0][:, :2]  # the cloud's main directions across the axis
     spans = [float(np.ptp(p @ d)) for d in (axis, others[:, 0], others[:, 1])]
-    tilt = float(np.degrees(np.arccos(np.clip(axis[2], -1.0, 1.0))))
+    tilt = float(np.degrees(np.arccos(min(abs(float(axis[2])), 1.0))))
     return ObjectFeatures(
         name=name,
         visible=True,
