@@ -184,6 +184,9 @@ class TaskGraph(GraphModel):
         """Same as from_json for an already-parsed object (e.g. tool-call arguments)."""
         if not isinstance(data, dict):
             raise GraphError(f"a task graph must be a JSON object, got {type(data).__name__}")
+        for key, limit in (("nodes", MAX_NODES), ("edges", MAX_EDGES)):  # refuse floods before parsing them
+            if isinstance(data.get(key), list) and len(data[key]) > limit:
+                raise GraphError(f"task graph has {len(data[key])} {key}; the limit is {limit}")
         try:
             graph = cls.model_validate(data)
         except ValidationError as exc:
