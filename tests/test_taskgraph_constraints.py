@@ -126,3 +126,31 @@ def test_drift_latches_reference_at_bind():
 def test_bad_templates_rejected(data):
     with pytest.raises(ValidationError):
         make(**data)
+
+
+def test_reads_perception_object_features():
+    """The perception package's ObjectFeatures plugs in as is: extremes by name, None when not visible."""
+    from kintsugi.perception.features import ObjectFeatures
+
+    seen = ObjectFeatures(name="bottle", visible=True, n_points=300, fit="primitive", centroid=(0.0, 0.0, 0.1),
+                          axis=tilted(30.0), extremes={"top": (0.0, 0.0, 0.2), "bottom": (0.0, 0.0, 0.0),
+                                                       "axis_pos": (0.0, 0.0, 0.2), "axis_neg": (0.0, 0.0, 0.0)})
+    lost = ObjectFeatures(name="bottle", visible=False, n_points=0, fit="raw")
+    arm = {"right": ArmState(eef=(0.0, 0.0, 0.3))}
+    f, f_lost = Features(objects={"bottle": seen}, arms=arm), Features(objects={"bottle": lost}, arms=arm)
+    cases = [
+        ({"kind": "upright", "object": "bottle", "tol_deg": 10}, 20.0),
+        ({"kind": "near", "a": {"entity": "right"}, "b": {"entity": "bottle", "feature": "top"}, "tol": 0.0}, 0.1),
+        ({"kind": "near", "a": {"entity": "right"}, "b": {"entity": "bottle", "along": 0.75}, "tol": 0.0}, 0.15),
+        ({"kind": "detached", "arm": "right", "object": "bottle", "tol": 0.05}, 0.15),
+    ]
+    for data, expected in cases:
+        c = make(**data)
+        assert c.evaluate(f) == pytest.approx(expected), data
+        assert math.isnan(c.evaluate(f_lost)), data
+    assert make(kind="visibility", object="bottle", n_min=10).evaluate(f_lost) == 10.0
+
+
+def test_point_takes_feature_or_along_not_both():
+    with pytest.raises(ValidationError, match="either"):
+        make(kind="near", a={"entity": "cup", "feature": "top", "along": 0.5}, b={"entity": "cup"}, tol=0.1)

@@ -12,7 +12,7 @@ relational `above`, `near` and `in_region` for sub-goals.
 from __future__ import annotations
 
 import math
-from typing import Annotated, Iterator, Literal, Union
+from typing import Annotated, Iterator, Literal, Mapping, Union
 
 from pydantic import Field, StrictBool, model_validator
 
@@ -27,13 +27,37 @@ RefRole = Literal["object", "arm", "point"]
 """What a referenced entity must be: an object, an arm, or either (a point read from it)."""
 
 
+def vector_feature(obj: object, name: str):
+    """A 3-vector feature by name: an attribute, or an entry of the object's `extremes` mapping.
+
+    None when the object does not have it this step (e.g. not visible).
+    """
+    v = getattr(obj, name, None)
+    if v is None:
+        extremes = getattr(obj, "extremes", None)
+        if isinstance(extremes, Mapping):
+            v = extremes.get(name)
+    return v
+
+
 class Point(GraphModel):
-    """A 3-D point read from the features: an object's vector feature or an arm's end effector, plus a world offset."""
+    """A 3-D point read from the features, plus a world-frame offset.
+
+    Object: a vector feature (default `centroid`; extremes such as `top` by name), or with
+    `along` the point that fraction of the way from `axis_neg` (0) to `axis_pos` (1), e.g.
+    0.75 up a bottle. Arm: its end effector (`eef`, the only arm point).
+    """
 
     entity: Name
     feature: Name | None = None
-    """Object: a 3-vector feature (default `centroid`). Arm: only `eef` (the default)."""
+    along: Annotated[float, Field(strict=True, ge=0.0, le=1.0)] | None = None
     offset: Vec3 = (0.0, 0.0, 0.0)
+
+    @model_validator(mode="after")
+    def _one_way(self) -> "Point":
+        if self.along is not None and self.feature is not None:
+            raise ValueError("give either `feature` or `along`, not both")
+        return self
 
     def read(self, f: Features) -> tuple[float, float, float] | None:
         arm = f.arms.get(self.entity)
@@ -43,11 +67,25 @@ class Point(GraphModel):
             obj = f.objects.get(self.entity)
             if obj is None:
                 return None
-            v = getattr(obj, self.feature or "centroid", None)
+            if self.along is None:
+                v = vector_feature(obj, self.feature or "centroid")
+            else:
+                a, b = vector_feature(obj, "axis_neg"), vector_feature(obj, "axis_pos")
+                if a is None or b is None:
+                    return None
+                t = self.along
+                v = tuple(float(a[i]) + t * (float(b[i]) - float(a[i])) for i in range(3))
             if v is None:
                 return None
         ox, oy, oz = self.offset
         return (float(v[0]) + ox, float(v[1]) + oy, float(v[2]) + oz)
+
+    def refs(self) -> Iterator[tuple[str, RefRole, str | None]]:
+        if self.along is None:
+            yield (self.entity, "point", self.feature)
+        else:
+            yield (self.entity, "object", "axis_neg")
+            yield (self.entity, "object", "axis_pos")
 
 
 def _norm(d: tuple[float, float, float], axes: str) -> float:
@@ -57,7 +95,9 @@ def _norm(d: tuple[float, float, float], axes: str) -> float:
 
 
 def _tilt_deg(axis, gravity: Vec3) -> float:
-    """Angle between a sign-free principal axis and gravity, in [0, 90] degrees."""
+    """Angle between a sign-free principal axis and gravity, in [0, 90] degrees; NaN without an axis."""
+    if axis is None:
+        return NAN
     ax, ay, az = float(axis[0]), float(axis[1]), float(axis[2])
     gx, gy, gz = gravity
     n = math.sqrt(ax * ax + ay * ay + az * az) * math.sqrt(gx * gx + gy * gy + gz * gz)
@@ -112,7 +152,7 @@ class Drift(_Template):
         return self.ref is not None
 
     def refs(self):
-        yield (self.point.entity, "point", self.point.feature)
+        yield from self.point.refs()
 
 
 class Upright(_Template):
@@ -176,6 +216,8 @@ class Detached(_Template):
         if arm is None or obj is None:
             return NAN
         c, e = obj.centroid, arm.eef
+        if c is None:
+            return NAN
         d = (float(c[0]) - float(e[0]), float(c[1]) - float(e[1]), float(c[2]) - float(e[2]))
         return _norm(d, "xyz") - self.tol
 
@@ -213,8 +255,8 @@ class _Separation(_Template):
         return _norm((pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]), self.axes) - self.tol
 
     def refs(self):
-        yield (self.a.entity, "point", self.a.feature)
-        yield (self.b.entity, "point", self.b.feature)
+        yield from self.a.refs()
+        yield from self.b.refs()
 
 
 class Misaligned(_Separation):
@@ -246,8 +288,8 @@ class Above(_Template):
         return pb[2] + self.min_gap - pa[2]
 
     def refs(self):
-        yield (self.a.entity, "point", self.a.feature)
-        yield (self.b.entity, "point", self.b.feature)
+        yield from self.a.refs()
+        yield from self.b.refs()
 
 
 class InRegion(_Template):
@@ -272,7 +314,7 @@ class InRegion(_Template):
         return max(lo[0] - p[0], p[0] - hi[0], lo[1] - p[1], p[1] - hi[1], lo[2] - p[2], p[2] - hi[2])
 
     def refs(self):
-        yield (self.point.entity, "point", self.point.feature)
+        yield from self.point.refs()
 
 
 class Touching(_Template):

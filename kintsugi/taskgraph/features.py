@@ -21,12 +21,16 @@ OBJECT_FEATURES = frozenset({"centroid", "axis", "n_points"})
 
 
 class ObjectLike(Protocol):
-    """One perceived object: centroid (m, world frame), principal axis (unit, sign-free), points seen."""
+    """One perceived object: centroid (m, world frame), principal axis (sign-free), points seen.
+
+    `centroid` and `axis` may be None when the object is not visible this step. Further vector
+    features (e.g. `top`) are read by name as attributes or from an optional `extremes` mapping.
+    """
 
     @property
-    def centroid(self) -> Vec: ...
+    def centroid(self) -> Vec | None: ...
     @property
-    def axis(self) -> Vec: ...
+    def axis(self) -> Vec | None: ...
     @property
     def n_points(self) -> int: ...
 
