@@ -1,0 +1,48 @@
+"""Graph pictures: DOT text with nominal/recovery styles, and a real PNG drawn headless."""
+
+from __future__ import annotations
+
+import re
+
+import numpy as np
+from matplotlib.image import imread
+
+from kintsugi.taskgraph import to_dot, write_graph_picture
+from kintsugi.taskgraph.forward import forward_filter
+from kintsugi.taskgraph.render import NOMINAL, RECOVERY, layout
+from tests.taskgraph_fixtures import pour_graph, pour_graph_data
+from kintsugi.taskgraph.model import TaskGraph
+
+
+def test_dot_styles_and_escaping():
+    data = pour_graph_data()
+    data["task"] = 'pour "water"\\ now'
+    data["nodes"][0]["description"] = 'say "hi"\nthen go'
+    dot = to_dot(TaskGraph.from_data(data))
+    assert dot.startswith('digraph "pour \\"water\\"\\\\ now" {')
+    assert '"home" -> "grasped"' in dot and 'label="home\\nsay \\"hi\\"\\nthen go"' in dot
+    edges = [line for line in dot.splitlines() if "->" in line]
+    assert len(edges) == len(data["edges"])
+    for line in edges:
+        rec = re.search(r'"(r_\w+): ', line) is not None
+        assert ("style=dashed" in line) == rec and (RECOVERY in line) == rec and (NOMINAL in line) != rec
+    assert dot.count("peripheries=2") == 2  # start and goal
+    assert "m_drop: drop -> r_pick" in dot and "m_vis: tracking_lost -> detect only" in dot
+
+
+def test_layout_layers_nominal_and_offsets_recovery():
+    pos = layout(pour_graph())
+    assert [pos[n][0] for n in ("home", "grasped", "over_cup", "poured", "done")] == [0, 1, 2, 3, 4]
+    assert pos["regrasp"][0] == 1.5 and pos["regrasp"][1] < 0 and pos["reset"][1] < pos["regrasp"][1]
+
+
+def test_picture_is_written(tmp_path):
+    for name, graph in (("full", pour_graph()), ("filtered", forward_filter(pour_graph()).graph)):
+        out = write_graph_picture(graph, tmp_path / f"{name}.png")
+        img = imread(out)
+        assert img.shape[0] > 200 and img.shape[1] > 400
+        rgb = img[..., :3]
+        # Both colours are actually drawn (nominal blue and recovery pink pixels).
+        for hexcol in (NOMINAL, RECOVERY):
+            c = np.array([int(hexcol[i:i + 2], 16) / 255 for i in (1, 3, 5)])
+            assert (np.abs(rgb - c).max(axis=-1) < 0.08).sum() > 50, (name, hexcol)
