@@ -36,8 +36,8 @@ class RobotSection(StrictModel):
     torque_limits_nm: SixFloats = (150, 150, 100, 28, 28, 28)
     armature: SixFloats = (0.2, 0.2, 0.1, 0.03, 0.03, 0.02)
     """Reflected rotor inertia per joint (kg m^2)."""
-    home_deg: SixFloats = (0.0, 10.0, 120.0, 0.0, 50.0, 0.0)
-    """The `back` configuration: gripper pointing down, in front of the shoulder."""
+    home_deg: SixFloats = (0.0, -20.0, 110.0, 0.0, 90.0, 0.0)
+    """The `back` configuration: gripper pointing down, 0.35 m above the table, clear of the objects."""
     gripper_max_opening_m: float = Field(0.10, gt=0.02, le=0.2)
     grip_force_n: float = Field(20.0, gt=0)
     """Squeeze of each finger when closed (the tendon actuator's force limit)."""

@@ -28,6 +28,8 @@ class Shape:
     half_height: float = 0.0
     half_extents: tuple[float, float, float] = (0.0, 0.0, 0.0)
     grasp: Literal["side_if_upright", "top"] = "top"
+    hollow: bool = False
+    """Open containers: cameras see inside, so a solid primitive must not be checked against the views."""
 
     def primitive(self) -> Primitive:
         """The shape as the perception catalogue states it (what a fit may assume)."""
@@ -44,7 +46,7 @@ class Shape:
 def shape_of(kind: str, objects: ObjectsSection) -> Shape:
     s = getattr(objects, kind).size_m
     if kind in ("bottle", "cup"):
-        return Shape("cylinder", radius=s[0], half_height=s[1], grasp="side_if_upright")
+        return Shape("cylinder", radius=s[0], half_height=s[1], grasp="side_if_upright", hollow=kind == "cup")
     if kind in ("plate", "capsule"):
         return Shape("cylinder", radius=s[0], half_height=s[1])
     if kind in ("fork", "spoon"):

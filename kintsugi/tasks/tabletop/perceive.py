@@ -13,8 +13,7 @@ import math
 
 import numpy as np
 
-from kintsugi.perception.cloud import object_clouds, render_view
-from kintsugi.perception.features import ObjectFeatures, features, sign_normalized
+from kintsugi.perception.features import ObjectFeatures, features, object_clouds, render_view, sign_normalized
 from kintsugi.perception.primitives import Fit
 from kintsugi.tasks.tabletop.objects import Shape
 from kintsugi.tasks.tabletop.scene import CAMERAS
@@ -35,9 +34,10 @@ class ObjectPerception:
         if self.mode == "truth":
             return truth_features(self._world.ground_truth(), self._shapes)
         w = self._world
-        views = [render_view(w.renderer, w.data, cam) for cam in CAMERAS]
+        views = [render_view(w.seg_depth_renderer, w.data, cam) for cam in CAMERAS]
         clouds = object_clouds(views, self._geoms)
-        return {k: features(k, clouds[k], self._shapes[k].primitive()) for k in w.objects}
+        return {k: features(k, clouds[k], self._shapes[k].primitive(), views=None if self._shapes[k].hollow else views)
+                for k in w.objects}
 
 
 def truth_features(truth: GroundTruth, shapes: dict[str, Shape]) -> dict[str, ObjectFeatures]:

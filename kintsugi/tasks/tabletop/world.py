@@ -17,6 +17,7 @@ import numpy as np
 
 from kintsugi.config import StrictModel
 from kintsugi.errors import SimulationDiverged, UnknownNameError
+from kintsugi.perception.features import SegDepthRenderer
 from kintsugi.tasks.tabletop.arm_model import JOINTS
 from kintsugi.tasks.tabletop.config import ARMS, TabletopConfig
 from kintsugi.tasks.tabletop.objects import Shape, shape_of
@@ -140,6 +141,7 @@ class TabletopWorld:
         self._forced_open: dict[str, float] = {}
         self._grip_ctrl = {arm: 0.0 for arm in ARMS}
         self._renderer: mujoco.Renderer | None = None
+        self._seg_depth: SegDepthRenderer | None = None
 
     # --- stepping ----------------------------------------------------------
     def tick(self) -> None:
@@ -237,6 +239,13 @@ class TabletopWorld:
             self._renderer = mujoco.Renderer(self.model, self.cfg.cameras.height, self.cfg.cameras.width)
         return self._renderer
 
+    @property
+    def seg_depth_renderer(self) -> SegDepthRenderer:
+        """Segmentation + depth in one pass (perception's renderer), kept alive for the world's life."""
+        if self._seg_depth is None:
+            self._seg_depth = SegDepthRenderer(self.model, self.cfg.cameras.width, self.cfg.cameras.height)
+        return self._seg_depth
+
     def render(self, camera: str, view: View = "rgb") -> np.ndarray:
         """rgb (H, W, 3) uint8; depth (H, W) metres; seg (H, W) geom id per pixel, -1 for background."""
         r = self.renderer
@@ -258,6 +267,9 @@ class TabletopWorld:
         if self._renderer is not None:
             self._renderer.close()
             self._renderer = None
+        if self._seg_depth is not None:
+            self._seg_depth.close()
+            self._seg_depth = None
 
     # --- ground truth: scoring and the truth-features option only ------------
     def ground_truth(self) -> GroundTruth:
