@@ -90,6 +90,8 @@ class TrialRecord(StrictModel):
     transcript: list[dict[str, Any]] = Field(default_factory=list)
     error: str | None = None
     video: str | None = None
+    details: dict[str, Any] = Field(default_factory=dict)
+    """Task-specific figures (the task's own typed model, dumped), e.g. a pour's max tilt over the cup."""
 
     def without_timings(self) -> dict[str, Any]:
         """The record minus wall-clock fields: equal for equal seeds."""

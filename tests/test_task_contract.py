@@ -8,6 +8,7 @@ different seeds under condition "all" sample different hidden parameters. Broken
 
 from __future__ import annotations
 
+import functools
 import math
 from typing import Any, Callable
 
@@ -43,14 +44,25 @@ def _step_peg_world(variant: str, condition: str, seed: int) -> tuple[mujoco.MjM
     return world.model, world.data
 
 
+def _step_tabletop_world(task: str, variant: str, condition: str, seed: int) -> tuple[mujoco.MjModel, mujoco.MjData]:
+    """Build a tabletop task's world directly and run its scripted sequence (grasps included)."""
+    from kintsugi.tasks.tabletop.task import run_script
+
+    world = run_script(TASKS.get(task).factory(), condition, seed)
+    world.close()
+    assert world.steps > 1000
+    return world.model, world.data
+
+
 WORLD_STEPPERS: dict[str, Callable[[str, str, int], tuple[mujoco.MjModel, mujoco.MjData]]] = {
     "peg-insertion": _step_peg_world,
-}
+} | {e.name: functools.partial(_step_tabletop_world, e.name) for e in BUILTIN if "tabletop" in e.tags}
 """How to build and step each task's world directly, to read MuJoCo's warning counters."""
 
 
 def _spec(task: str, variant: str, seed: int = 0, condition: str = "all", **kw: Any) -> TrialSpec:
-    return TrialSpec(task=task, method="baseline", variant=variant, condition=condition, seed=seed, **kw)
+    method = getattr(TASKS.get(task).factory(), "reference_method", "baseline")
+    return TrialSpec(task=task, method=method, variant=variant, condition=condition, seed=seed, **kw)
 
 
 def _floats(value: Any) -> list[float]:

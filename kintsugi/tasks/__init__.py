@@ -8,3 +8,4 @@ TASKS: Registry = Registry("task")
 def load_all() -> None:
     """Import every built-in task module so its registration runs."""
     from kintsugi.tasks.peg import task  # noqa: F401
+    from kintsugi.tasks.tabletop import tasks  # noqa: F401

@@ -1,0 +1,66 @@
+"""What a tabletop task declares: its objects, instruction, goal predicates, scoring and script.
+
+A task file (e.g. pour_single.py) builds one `TaskSpec`; task.py runs any spec. Goal
+predicates are text a planner or reasoner reads (`poured(bottle, cup)`); the
+`Scorer` checks the same goal on ground truth, watching the world every control
+tick (for goals about history, like "was tilted over the cup") and at the end.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Callable, Protocol
+
+import numpy as np
+
+from kintsugi.config import StrictModel
+from kintsugi.tasks.tabletop.config import TabletopConfig
+from kintsugi.tasks.tabletop.world import GroundTruth, TabletopWorld
+
+
+class Scorer(Protocol):
+    """Ground-truth judge of one trial; sees the world, never shown to a method."""
+
+    def watch(self, world: TabletopWorld) -> None: ...
+
+    def finish(self, world: TabletopWorld) -> tuple[bool, StrictModel]: ...
+
+
+Script = Callable[[Any], list[dict[str, Any]]]
+"""First `Observation` -> the nominal sequence of action dicts (no checks, no recovery)."""
+
+
+@dataclass(frozen=True)
+class TaskSpec:
+    name: str
+    description: str
+    objects: tuple[str, ...]
+    instruction: str
+    goal: tuple[str, ...]
+    script: Script
+    scorer: Callable[[TabletopConfig], Scorer]
+    targets: tuple[str, ...] = ()
+
+
+# --- ground-truth predicates shared by the tasks' scorers ------------------------
+
+def upright(truth: GroundTruth, obj: str, tol_deg: float) -> bool:
+    return truth.objects[obj].tilt_deg <= tol_deg
+
+
+def on_table(truth: GroundTruth, obj: str, rest_height: float, tol_m: float = 0.005) -> bool:
+    """Resting upright on the table: its centre at its standing height."""
+    return abs(truth.objects[obj].pos[2] - rest_height) <= tol_m
+
+
+def at_rest(truth: GroundTruth, obj: str, speed_m_s: float) -> bool:
+    return truth.objects[obj].speed_m_s <= speed_m_s
+
+
+def held(truth: GroundTruth, obj: str) -> bool:
+    return any(obj in objs for objs in truth.held.values())
+
+
+def tilt_deg(axis: np.ndarray) -> float:
+    return math.degrees(math.acos(float(np.clip(axis[2], -1.0, 1.0))))
