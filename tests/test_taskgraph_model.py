@@ -201,3 +201,15 @@ def test_validate_uses_deep_copies_safely():
     before = copy.deepcopy(data)
     TaskGraph.from_data(data, VOCAB)
     assert data == before
+
+
+def test_copy_is_checked_and_drops_cached_views():
+    g = pour_graph()
+    assert g.nx.edges["over_cup", "poured", "e_tilt"]["weight"] == 30
+    edges = tuple(e.model_copy(update={"cost": 7.0}) if e.id == "e_tilt" else e for e in g.edges)
+    cheaper = g.model_copy(update={"edges": edges})
+    assert cheaper.nx.edges["over_cup", "poured", "e_tilt"]["weight"] == 7
+    assert g.nx.edges["over_cup", "poured", "e_tilt"]["weight"] == 30
+    assert cheaper == TaskGraph.from_json(cheaper.to_json())
+    with pytest.raises(GraphError, match="recovery edge 'r_pick' does not exist"):
+        g.model_copy(update={"edges": tuple(e for e in g.edges if e.id != "r_pick")})

@@ -9,9 +9,9 @@ from matplotlib.image import imread
 
 from kintsugi.taskgraph import to_dot, write_graph_picture
 from kintsugi.taskgraph.forward import forward_filter
+from kintsugi.taskgraph.model import TaskGraph
 from kintsugi.taskgraph.render import NOMINAL, RECOVERY, layout
 from tests.taskgraph_fixtures import pour_graph, pour_graph_data
-from kintsugi.taskgraph.model import TaskGraph
 
 
 def test_dot_styles_and_escaping():

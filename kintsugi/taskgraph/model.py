@@ -116,6 +116,11 @@ class TaskGraph(GraphModel):
         check_structure(self)
         return self
 
+    def model_copy(self, *, update: dict[str, Any] | None = None, deep: bool = False) -> "TaskGraph":
+        """A checked copy: pydantic's plain copy would skip the structure checks and keep stale caches."""
+        fields = {k: getattr(self, k) for k in type(self).model_fields}
+        return type(self).model_validate({**fields, **(update or {})})
+
     # -- lookups -------------------------------------------------------------------------
     @cached_property
     def node_map(self) -> dict[str, Node]:
