@@ -62,7 +62,8 @@ class ObjectFeatures(StrictModel):
     `axis` is the principal axis (a fitted cylinder's axis, a box's longest side), unit,
     pointing up; within 2 deg of horizontal it points to +x (then +y) instead.
     `extremes`: `top` / `bottom` (centre of the highest / lowest face, edge or point) and
-    `axis_pos` / `axis_neg` (the two ends along `axis`). Fields other than name, visible,
+    `axis_pos` / `axis_neg` (the two ends along `axis`), and for a fitted container
+    `opening` (the centre of its open end). Fields other than name, visible,
     n_points, fit and note are None when the object is not visible.
     """
 
@@ -202,6 +203,8 @@ def features(
             "axis_pos": centroid + h * axis if fit_axis is not None else fit.support(axis),
             "axis_neg": centroid - h * axis if fit_axis is not None else fit.support(-axis),
         }
+        if (opening := fit.opening) is not None:
+            extremes["opening"] = opening
     else:
         centroid, axis, has_axis = raw_centroid, raw_axis, bool(elongated)
         extremes = {

@@ -27,31 +27,43 @@ class Primitive(StrictModel):
 
     cylinder: `radius`, optional `half_length` (half its height along the axis);
     box: `half_extents`; sphere: `radius`; none: no known shape (raw features only).
+    `wall`: the object is a container open at one end (a cup: the cylinder's +axis end;
+    a tray: the box's +z face) with walls and floor this thick, so that the points a
+    camera sees inside it lie on the shape too.
     """
 
     kind: Literal["cylinder", "box", "sphere", "none"] = "none"
     radius: PositiveFloat | None = None
     half_length: PositiveFloat | None = None
     half_extents: tuple[PositiveFloat, PositiveFloat, PositiveFloat] | None = None
+    wall: PositiveFloat | None = None
 
     @model_validator(mode="after")
     def _fields_match_kind(self) -> Primitive:
         need = {"cylinder": {"radius"}, "box": {"half_extents"}, "sphere": {"radius"}, "none": set()}[self.kind]
-        allowed = need | ({"half_length"} if self.kind == "cylinder" else set())
-        given = {f for f in ("radius", "half_length", "half_extents") if getattr(self, f) is not None}
+        allowed = need | ({"half_length", "wall"} if self.kind == "cylinder" else set())
+        allowed |= {"wall"} if self.kind == "box" else set()
+        given = {f for f in ("radius", "half_length", "half_extents", "wall") if getattr(self, f) is not None}
         if need - given:
             raise ValueError(f"a {self.kind} primitive needs {', '.join(sorted(need - given))}")
         if given - allowed:
             raise ValueError(f"a {self.kind} primitive takes no {', '.join(sorted(given - allowed))}")
+        if self.wall is not None:
+            if self.kind == "cylinder" and self.half_length is None:
+                raise ValueError("a cylinder container (wall) needs half_length")
+            inner = (self.radius, 2 * self.half_length) if self.kind == "cylinder" else (
+                min(self.half_extents[:2]), 2 * self.half_extents[2])  # type: ignore[index]
+            if self.wall >= min(inner):
+                raise ValueError(f"wall {self.wall} leaves no cavity inside the {self.kind}")
         return self
 
     @classmethod
-    def cylinder(cls, radius: float, half_length: float | None = None) -> Primitive:
-        return cls(kind="cylinder", radius=radius, half_length=half_length)
+    def cylinder(cls, radius: float, half_length: float | None = None, wall: float | None = None) -> Primitive:
+        return cls(kind="cylinder", radius=radius, half_length=half_length, wall=wall)
 
     @classmethod
-    def box(cls, hx: float, hy: float, hz: float) -> Primitive:
-        return cls(kind="box", half_extents=(hx, hy, hz))
+    def box(cls, hx: float, hy: float, hz: float, wall: float | None = None) -> Primitive:
+        return cls(kind="box", half_extents=(hx, hy, hz), wall=wall)
 
     @classmethod
     def sphere(cls, radius: float) -> Primitive:
@@ -68,6 +80,14 @@ class Fit:
     size: np.ndarray  # cylinder (r, h, 0); box half extents; sphere (r, 0, 0)
     rms: float  # RMS of the inlier residuals, metres
     inliers: float  # fraction of points within the inlier tolerance of the surface
+    wall: float = 0.0  # > 0: a container open at its local +z end
+
+    @property
+    def opening(self) -> np.ndarray | None:
+        """Centre of a container's open end (None for solids)."""
+        if self.wall <= 0.0 or self.kind == "sphere":
+            return None
+        return self.centre + self.frame[:, 2] * (self.size[1] if self.kind == "cylinder" else self.size[2])
 
     @property
     def axis(self) -> np.ndarray | None:
@@ -179,6 +199,25 @@ def box_sdf(x: np.ndarray, he: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return d, g
 
 
+def container_sdf(
+    outer: tuple[np.ndarray, np.ndarray], cavity: tuple[np.ndarray, np.ndarray]
+) -> tuple[np.ndarray, np.ndarray]:
+    """The solid minus its cavity (a CSG difference): max(outer, -cavity)."""
+    (a, ga), (b, gb) = outer, cavity
+    use_outer = a >= -b
+    return np.where(use_outer, a, -b), np.where(use_outer[:, None], ga, -gb)
+
+
+def cylinder_cup_sdf(x: np.ndarray, r: float, h: float, wall: float) -> tuple[np.ndarray, np.ndarray]:
+    """A cup: cylinder open at +z, walls and floor `wall` thick (the cavity runs out past the rim)."""
+    return container_sdf(cylinder_sdf(x, r, h), cylinder_sdf(x - [0.0, 0.0, wall], r - wall, h))
+
+
+def box_tray_sdf(x: np.ndarray, he: np.ndarray, wall: float) -> tuple[np.ndarray, np.ndarray]:
+    """A tray: box open at +z, walls and floor `wall` thick."""
+    return container_sdf(box_sdf(x, he), box_sdf(x - [0.0, 0.0, wall], he - [wall, wall, 0.0]))
+
+
 def sphere_sdf(x: np.ndarray, r: float) -> tuple[np.ndarray, np.ndarray]:
     norm = np.linalg.norm(x, axis=1)
     return norm - r, x / np.where(norm > 1e-12, norm, 1.0)[:, None]
@@ -239,7 +278,7 @@ def _rigid_fit(
         return j * scale[:, None]
 
     sol = least_squares(fun, np.zeros(nt + tr.shape[1]), jac=jac, method="lm", max_nfev=s.max_nfev, ftol=1e-6, xtol=1e-7)
-    if sol.status < 1 or not np.all(np.isfinite(sol.x)):
+    if sol.status < 0 or not np.all(np.isfinite(sol.x)):  # 0: evaluation budget spent, still a usable fit
         return None
     c, frame = c0 + tc @ sol.x[:nt], _exp(tr @ sol.x[nt:]) @ r0
     return c, frame, sdf((p - c) @ frame)[0]
@@ -259,15 +298,45 @@ UP = np.array([0.0, 0.0, 1.0])
 Accept = Callable[[Fit], bool]
 
 
-def _cylinder_attempt(p: np.ndarray, radius: float, half_length: float | None, a0: np.ndarray, s: FitSettings):
+def _rim_start(p: np.ndarray, a: np.ndarray, depth: float, radius: float | None = None, band: float = 0.005) -> np.ndarray:
+    """Initial centre of a container opening towards a, from its rim: the band of points at the extreme
+    along a. A round rim's centre is the centre of the circle through those points (an algebraic fit,
+    right even for a partly seen rim); otherwise their mean. A thin wall's inner and outer faces are
+    parallel, so a start off by about a wall thickness can settle with the two faces swapped."""
+    t = p @ a
+    rim = p[t >= t.max() - band]
+    centre = rim.mean(axis=0)
+    if radius is not None and len(rim) >= 10:
+        e1, e2 = _perp_basis(a)
+        uv = (rim - centre) @ np.column_stack([e1, e2])
+        lhs = np.column_stack([2 * uv, np.ones(len(uv))])
+        sol, *_ = np.linalg.lstsq(lhs, (uv**2).sum(axis=1), rcond=None)
+        fitted_r = math.sqrt(max(sol[2] + sol[0] ** 2 + sol[1] ** 2, 0.0))
+        if abs(fitted_r - radius) < 0.25 * radius:  # a plausible rim circle, else keep the mean
+            centre = centre + sol[0] * e1 + sol[1] * e2
+    return centre - depth * a
+
+
+def _cylinder_attempt(
+    p: np.ndarray,
+    radius: float,
+    half_length: float | None,
+    wall: float | None,
+    a0: np.ndarray,
+    s: FitSettings,
+    c0: np.ndarray | None = None,
+):
     def attempt() -> Fit | None:
         frame0 = _frame_with_z(a0 / np.linalg.norm(a0))
         across = frame0[:, :2]  # rotations about the axis change nothing
-        c0 = p.mean(axis=0)
-        if half_length is not None:
-            out = _rigid_fit(p, lambda x: cylinder_sdf(x, radius, half_length), c0, frame0, I3, across, s)
+        c_start = p.mean(axis=0) if c0 is None else c0
+        if wall is not None and half_length is not None:
+            cup = lambda x: cylinder_cup_sdf(x, radius, half_length, wall)  # noqa: E731
+            out = _rigid_fit(p, cup, c_start, frame0, I3, across, s)
+        elif half_length is not None:
+            out = _rigid_fit(p, lambda x: cylinder_sdf(x, radius, half_length), c_start, frame0, I3, across, s)
         else:  # infinitely long: the centre moves only across the axis, then sits mid-way along the points
-            out = _rigid_fit(p, lambda x: cylinder_sdf(x, radius, None), c0, frame0, across, across, s)
+            out = _rigid_fit(p, lambda x: cylinder_sdf(x, radius, None), c_start, frame0, across, across, s)
         if out is None:
             return None
         c, frame, res = out
@@ -276,15 +345,20 @@ def _cylinder_attempt(p: np.ndarray, radius: float, half_length: float | None, a
             t = (p - c) @ frame[:, 2]
             c = c + frame[:, 2] * (t.max() + t.min()) / 2.0
             h = float(t.max() - t.min()) / 2.0
-        return Fit("cylinder", c, frame, np.array([radius, h, 0.0]), *_quality(res, s))
+        return Fit("cylinder", c, frame, np.array([radius, h, 0.0]), *_quality(res, s), wall=wall or 0.0)
 
     return attempt
 
 
-def _box_attempt(p: np.ndarray, he: np.ndarray, r0: np.ndarray, s: FitSettings):
+def _box_attempt(
+    p: np.ndarray, he: np.ndarray, wall: float | None, r0: np.ndarray, s: FitSettings, c0: np.ndarray | None = None
+):
+    def sdf(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return box_sdf(x, he) if wall is None else box_tray_sdf(x, he, wall)
+
     def attempt() -> Fit | None:
-        out = _rigid_fit(p, lambda x: box_sdf(x, he), p.mean(axis=0), r0, I3, I3, s)
-        return None if out is None else Fit("box", out[0], out[1], he, *_quality(out[2], s))
+        out = _rigid_fit(p, sdf, p.mean(axis=0) if c0 is None else c0, r0, I3, I3, s)
+        return None if out is None else Fit("box", out[0], out[1], he, *_quality(out[2], s), wall=wall or 0.0)
 
     return attempt
 
@@ -303,35 +377,73 @@ def fit_primitive(
     """Best fit of a known primitive over a few starts, and how many fits `accept` rejected.
 
     Starts run in order of likelihood and stop at the first clean fit that `accept`
-    (e.g. a check against what the cameras saw) lets through.
+    (e.g. a check against what the cameras saw) lets through. A container's thin
+    wall has parallel inner and outer faces, so the points alone also fit it about
+    one wall thickness off (faces swapped); when no start gives an accepted clean
+    fit, the best fits are retried one wall thickness away to each side.
     """
+    wall = primitive.wall
     if primitive.kind == "cylinder":
         squat = primitive.half_length is not None and primitive.half_length < primitive.radius
         likely = (pca_axes[:, 2], UP, pca_axes[:, 0]) if squat else (pca_axes[:, 0], UP, pca_axes[:, 1], pca_axes[:, 2])
+        if wall is not None:  # a container most likely stands
+            likely = (UP, *likely)
         axes: list[np.ndarray] = []
-        for a in likely:  # a squat cylinder (plate, cup) is thinnest along its axis, a long one longest
+        for a in likely:  # a squat cylinder (plate) is thinnest along its axis, a long one longest
             if all(abs(a @ b) < 0.95 for b in axes):
                 axes.append(a)
-        attempts = [_cylinder_attempt(p, float(primitive.radius), primitive.half_length, a, s) for a in axes]
+        r, h = float(primitive.radius), primitive.half_length
+
+        def cyl(a: np.ndarray, c0: np.ndarray | None = None):
+            return _cylinder_attempt(p, r, h, wall, a, s, c0)
+
+        if wall is None:
+            attempts = [cyl(a) for a in axes]
+        else:  # a container's two ends differ: each axis both ways, centred on its rim
+            attempts = [cyl(e, _rim_start(p, e, h, r)) for a in axes for e in (a, -a)]  # type: ignore[arg-type]
+
+        def hop(f: Fit, c: np.ndarray):
+            return cyl(f.frame[:, 2], c)
+
     elif primitive.kind == "box":
         he = np.asarray(primitive.half_extents, float)
-        attempts = [_box_attempt(p, he, r0, s) for r0 in box_starts(pca_axes, p, he)]
+        frames = box_starts(pca_axes, p, he)
+        if wall is None:
+            attempts = [_box_attempt(p, he, None, r0, s) for r0 in frames]
+        else:  # open side up first, then upside down
+            frames = [f for r0 in frames for f in (r0, r0 * [1.0, -1.0, -1.0])]
+            attempts = [_box_attempt(p, he, wall, r0, s, _rim_start(p, r0[:, 2], he[2])) for r0 in frames]
+
+        def hop(f: Fit, c: np.ndarray):
+            return _box_attempt(p, he, wall, f.frame, s, c)
+
     elif primitive.kind == "sphere":
         attempts = [_sphere_attempt(p, float(primitive.radius), s)]
     else:
         return None, 0
+
     fits: list[Fit] = []
+    tried: list[Fit] = []
     rejected = 0
-    for attempt in attempts:
-        fit = attempt()
-        if fit is None:
-            continue
-        if accept is not None and not accept(fit):
-            rejected += 1
-            continue
-        fits.append(fit)
-        if _good(fit, s):
-            break
+
+    def run(batch) -> bool:
+        nonlocal rejected
+        for attempt in batch:
+            fit = attempt()
+            if fit is None:
+                continue
+            tried.append(fit)
+            if accept is not None and not accept(fit):
+                rejected += 1
+                continue
+            fits.append(fit)
+            if _good(fit, s):
+                return True
+        return False
+
+    if not run(attempts) and wall is not None:
+        best = sorted(tried, key=lambda f: (-round(f.inliers, 2), f.rms))[:2]
+        run([hop(f, f.centre + sign * wall * f.frame[:, k]) for f in best for k in (0, 1) for sign in (1.0, -1.0)])
     return max(fits, key=lambda f: (round(f.inliers, 2), -f.rms), default=None), rejected
 
 
@@ -344,19 +456,25 @@ def surface_samples(fit: Fit, inset: float) -> np.ndarray:
         rho = np.sqrt(1 - z * z)
         local = (fit.size[0] - inset) * np.column_stack([rho * np.cos(phi), rho * np.sin(phi), z])
     elif fit.kind == "cylinder":
-        r, h = max(fit.size[0] - inset, 0.0), max(fit.size[1] - inset, 0.0)
+        # A container's wall may be thinner than the inset: inside it, the camera rightly sees the cavity.
+        r = max(fit.size[0] - (min(inset, fit.wall / 2) if fit.wall else inset), 0.0)
+        h = max(fit.size[1] - inset, 0.0)
+        zb = -fit.size[1] + (min(inset, fit.wall / 2) if fit.wall else inset)
         phi = np.linspace(0, 2 * np.pi, 24, endpoint=False)
         side = [np.column_stack([r * np.cos(phi), r * np.sin(phi), np.full(24, t)]) for t in np.linspace(-h, h, 7)]
-        caps = [np.column_stack([f * r * np.cos(phi), f * r * np.sin(phi), np.full(24, z)]) for f in (0.5, 1.0) for z in (-h, h)]
-        local = np.vstack(side + caps + [[[0, 0, -h], [0, 0, h]]])
+        ends = (zb,) if fit.wall else (-h, h)  # a container's open end is no surface
+        caps = [np.column_stack([f * r * np.cos(phi), f * r * np.sin(phi), np.full(24, z)]) for f in (0.5, 1.0) for z in ends]
+        local = np.vstack(side + caps + [[[0.0, 0.0, z] for z in ends]])
     else:
-        he = np.maximum(fit.size - inset, 0.0)
+        he = np.maximum(fit.size - (min(inset, fit.wall / 2) if fit.wall else inset), 0.0)
         g = np.linspace(-1, 1, 5)
         u, v = (a.ravel() for a in np.meshgrid(g, g))
         faces = []
         for k in range(3):
             i, j = [m for m in range(3) if m != k]
             for sign in (-1.0, 1.0):
+                if fit.wall and k == 2 and sign > 0:
+                    continue  # a tray's open top
                 face = np.zeros((25, 3))
                 face[:, i], face[:, j], face[:, k] = u * he[i], v * he[j], sign * he[k]
                 faces.append(face)
@@ -365,8 +483,9 @@ def surface_samples(fit: Fit, inset: float) -> np.ndarray:
 
 
 def box_starts(pca_axes: np.ndarray, p: np.ndarray, half_extents: np.ndarray) -> list[np.ndarray]:
-    """Initial frames: the cloud's principal axes on the box's sorted extents, then the box lying on
-    each face with its long side along the cloud's horizontal principal direction."""
+    """Initial frames: the box resting on its thinnest side (the likeliest pose on a table), the
+    cloud's principal axes on the box's sorted extents, then the box resting on its other sides;
+    resting boxes have their long side along the cloud's horizontal principal direction."""
     order = np.argsort(-np.asarray(half_extents))
     r_pca = np.zeros((3, 3))
     r_pca[:, order] = pca_axes
@@ -376,8 +495,8 @@ def box_starts(pca_axes: np.ndarray, p: np.ndarray, half_extents: np.ndarray) ->
     w, v = np.linalg.eigh(xy.T @ xy)
     long_dir = np.r_[v[:, 1], 0.0]
     short_dir = np.cross([0.0, 0.0, 1.0], long_dir)
-    starts = [r_pca]
-    for up in np.argsort(half_extents):  # thinnest side vertical first: the likeliest resting pose
+    starts = []
+    for up in np.argsort(half_extents):
         others = [j for j in range(3) if j != up]
         longer, shorter = sorted(others, key=lambda j: -half_extents[j])
         r = np.zeros((3, 3))
@@ -387,4 +506,4 @@ def box_starts(pca_axes: np.ndarray, p: np.ndarray, half_extents: np.ndarray) ->
         if np.linalg.det(r) < 0:
             r[:, shorter] *= -1
         starts.append(r)
-    return starts
+    return [starts[0], r_pca, *starts[1:]]
