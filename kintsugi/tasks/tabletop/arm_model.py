@@ -15,7 +15,12 @@ from kintsugi.tasks.tabletop.config import RobotSection
 
 JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")
 PAD_HALF = (0.012, 0.004, 0.025)
-"""Finger pad half-extents: across the finger, thickness, along the approach axis."""
+"""Finger pad half-extents: across the finger, thickness, along the approach axis.
+
+The pad collides as a capsule along the approach axis (radius = the pad's half thickness):
+a box face parallel to a bottle's side makes MuJoCo's convex collider flicker between
+contacts and none, and the bottle creeps out of the grasp; a capsule across the bottle's
+axis gives one steady point contact per finger (0.2 mm slip over a lift, tested)."""
 FINGER_HALF_TRAVEL = 0.05
 LINK_RGBA = "0.82 0.83 0.86 1"
 HAND_RGBA = "0.2 0.2 0.22 1"
@@ -95,8 +100,9 @@ def _gripper_xml(robot: RobotSection, p: str, hand_mass: float) -> str:
                   <body name="{p}finger_{name}" pos="0 0 {finger_z:.6g}" gravcomp="1">
                     <joint name="{p}finger_{name}" type="slide" axis="0 {-sign:g} 0" range="0 {half_open:.6g}"
                            damping="40" armature="0.01"/>
-                    <geom name="{p}pad_{name}" class="pad" type="box" size="{f(*PAD_HALF)}" pos="0 {y:.6g} {tcp - finger_z:.6g}"
+                    <geom name="{p}pad_{name}" class="pad" type="capsule" size="{PAD_HALF[1]:.6g}" fromto="0 {y:.6g} {tcp - finger_z - PAD_HALF[2] + PAD_HALF[1]:.6g} 0 {y:.6g} {tcp - finger_z + PAD_HALF[2] - PAD_HALF[1]:.6g}"
                           mass="0.05"/>
+                    <geom class="visual" type="box" size="{f(*PAD_HALF)}" pos="0 {y:.6g} {tcp - finger_z:.6g}"/>
                     <geom class="visual" type="box" size="{f(PAD_HALF[0], PAD_HALF[1], 0.012)}" pos="0 {y:.6g} 0.012"/>
                   </body>""")
     palm_half_z = (finger_z) / 2

@@ -28,6 +28,8 @@ LINEAR_STEP_M = 0.015
 LINEAR_STEP_RAD = math.radians(10.0)
 TABLE_CLEARANCE_M = 0.004
 """Finger tips stay this far above the table when grasping low objects."""
+HOVER_CLEARANCE_M = 0.04
+"""The fingers pass this far above an object's top on their way to its pre-grasp pose."""
 FLAT_TILT_DEG = 45.0
 AXES = {"normal": 0, "closing": 1, "approach": 2}
 
@@ -54,12 +56,12 @@ class ArmView:
 
 def side_rotation(yaw: float) -> np.ndarray:
     """Gripper horizontal, approaching along `yaw`, fingers closing horizontally (a side grasp)."""
-    return Rotation.from_euler("zy", [yaw, math.pi / 2]).as_matrix()
+    return Rotation.from_euler("ZY", [yaw, math.pi / 2]).as_matrix()
 
 
 def down_rotation(yaw: float) -> np.ndarray:
     """Gripper pointing down; its closing axis is horizontal, perpendicular to direction `yaw`."""
-    return Rotation.from_euler("zy", [yaw, math.pi]).as_matrix()
+    return Rotation.from_euler("ZY", [yaw, math.pi]).as_matrix()
 
 
 def rpy_matrix(rpy_deg: tuple[float, float, float]) -> np.ndarray:
@@ -186,10 +188,20 @@ class Planner:
             style = "top-down" + (" (fallen)" if shape.grasp == "side_if_upright" else "")
         approach = rot[:, 2]
         pre = c - a.pre_grasp_offset * approach
-        q_pre = self._solve(a.arm, pre, rot, arm.q, f"the pre-grasp pose of {a.obj}")
-        return [
-            Grip(False, "open"),
-            Move([q_pre], tcp=(pre, rot), label=f"pre-grasp {a.obj} {style}"),
+        # Come down onto the pre-grasp pose from above the object, so the joint-space move
+        # there never sweeps the fingers through it.
+        below = PAD_HALF[0] if "side" in style else PAD_HALF[2]
+        hover = pre.copy()
+        hover[2] = max(pre[2], f.extremes["top"][2] + below + HOVER_CLEARANCE_M)
+        q_hover = self._solve(a.arm, hover, rot, arm.q, f"the pose above {a.obj}")
+        steps: list[Step] = [Grip(False, "open"), Move([q_hover], tcp=(hover, rot), label=f"above {a.obj} {style}")]
+        q_pre = q_hover
+        if hover[2] > pre[2] + 1e-3:
+            down = self._linear(a.arm, (hover, rot), (pre, rot), q_hover, f"the pre-grasp pose of {a.obj}",
+                                f"pre-grasp {a.obj}")
+            steps.append(down)
+            q_pre = down.waypoints[-1]
+        return steps + [
             self._linear(a.arm, (pre, rot), (c, rot), q_pre, f"the grasp pose of {a.obj}", f"approach {a.obj}"),
             Grip(True, "close"),
         ]
