@@ -132,7 +132,7 @@ def validate_plan(reply: PlanReply, request: PlanRequest) -> ValidatedPlan:
                         f"outside the workspace [{_fmt(bounds[0])}, {_fmt(bounds[1])}]; the caller's goals "
                         f"or workspace are inconsistent"
                     )
-            value = min(max(wanted, lo), hi)
+            value = min(max(wanted, lo), hi) + 0.0  # a bound taken from a -0.0 goal stays non-negative zero
             if value != wanted:
                 reason = _clamp_reason(wanted, value, now, request.max_step_mm, bounds)
                 notes.append(f"{where}: {axis} {_fmt(wanted)} -> {_fmt(value)} ({reason})")
