@@ -2,8 +2,8 @@
 
     .venv/bin/python bench/bench_features.py [--repeats 40] [--seed 0]
 
-A tabletop scene built here (table plane, bottle, cup, plate, block, capsule
-ball, tray, and two 7-link arms of capsules for realistic render load), two
+A tabletop scene built here (table plane, bottle, hollow cup, plate, block, ball,
+open tray, and two 7-link arms of capsules for realistic render load), two
 cameras (top, front) at 320x240. Each repeat draws new object poses (upright or
 lying bottle and cup, random yaw), then times, in rotating order:
   render   - seg + depth of one camera: one pass (`SegDepthRenderer`) and, for comparison,
@@ -40,33 +40,56 @@ from kintsugi.perception.features import (
 W, H = 320, 240
 TARGET_MS = 15.0
 CAMERAS = ("top", "front")
-OBJECTS = {  # name: (geom xml, primitive, can lie down)
-    "bottle": ('type="cylinder" size="0.035 0.11"', Primitive.cylinder(0.035, 0.11), True),
-    "cup": ('type="cylinder" size="0.04 0.05"', Primitive.cylinder(0.04, 0.05), True),
-    "plate": ('type="cylinder" size="0.1 0.008"', Primitive.cylinder(0.1, 0.008), False),
-    "block": ('type="box" size="0.03 0.03 0.03"', Primitive.box(0.03, 0.03, 0.03), False),
-    "ball": ('type="sphere" size="0.025"', Primitive.sphere(0.025), False),
-    "tray": ('type="box" size="0.12 0.08 0.01"', Primitive.box(0.12, 0.08, 0.01), False),
+
+
+def cup_geoms(r: float, h: float, wall: float, walls: int = 16) -> str:
+    """A hollow cup: a floor disc and a ring of thin boxes, open at the top."""
+    half_w = (r - wall / 2) * math.tan(math.pi / walls) + 0.001
+    out = f'<geom type="cylinder" size="{r} {wall / 2}" pos="0 0 {-h + wall / 2}"/>'
+    for k in range(walls):
+        a = 2 * math.pi * k / walls
+        x, y = (r - wall / 2) * math.cos(a), (r - wall / 2) * math.sin(a)
+        out += (f'<geom type="box" size="{wall / 2} {half_w} {h - wall / 2}" pos="{x} {y} {wall / 2}" '
+                f'euler="0 0 {math.degrees(a)}"/>')
+    return out
+
+
+def tray_geoms(hx: float, hy: float, hz: float, wall: float) -> str:
+    """A tray: a base plate and four rims, open at the top."""
+    out = f'<geom type="box" size="{hx} {hy} {wall / 2}" pos="0 0 {-hz + wall / 2}"/>'
+    for sx, sy in ((1, 0), (-1, 0), (0, 1), (0, -1)):
+        size = (wall / 2, hy, hz) if sx else (hx, wall / 2, hz)
+        out += f'<geom type="box" size="{size[0]} {size[1]} {size[2]}" pos="{sx * (hx - wall / 2)} {sy * (hy - wall / 2)} 0"/>'
+    return out
+
+
+OBJECTS = {  # name: (geoms xml, primitive, can lie down)
+    "bottle": ('<geom type="cylinder" size="0.035 0.11"/>', Primitive.cylinder(0.035, 0.11), True),
+    "cup": (cup_geoms(0.04, 0.05, 0.004), Primitive.cylinder(0.04, 0.05, wall=0.004), True),
+    "plate": ('<geom type="cylinder" size="0.1 0.008"/>', Primitive.cylinder(0.1, 0.008), False),
+    "block": ('<geom type="box" size="0.03 0.03 0.03"/>', Primitive.box(0.03, 0.03, 0.03), False),
+    "ball": ('<geom type="sphere" size="0.025"/>', Primitive.sphere(0.025), False),
+    "tray": (tray_geoms(0.1, 0.07, 0.012, 0.006), Primitive.box(0.1, 0.07, 0.012, wall=0.006), False),
 }
-SLOTS = [(0.10, 0.15), (-0.12, 0.20), (0.15, -0.15), (-0.15, -0.12), (0.0, 0.0), (-0.02, -0.30)]
+SLOTS = [(x, y) for x in (-0.2, 0.15) for y in (-0.3, 0.0, 0.3)]  # far enough apart for any pose
 
 
 def _arm(name: str, y: float) -> str:
-    links, body = "", ""
+    links = ""
     for i in range(7):
         links += f'<body name="{name}{i}" pos="0 0 {0.12 if i else 0.3}" euler="{20 if i % 2 else -15} 0 0">'
         links += f'<geom type="capsule" size="0.035" fromto="0 0 0 0 0 0.12" rgba=".7 .7 .7 1"/>'
-    body = f'<body name="{name}" pos="-0.45 {y} 0">' + links + "</body>" * 8
-    return body
+    return f'<body name="{name}" pos="-0.45 {y} 0">' + links + "</body>" * 8
 
 
 def scene_xml() -> str:
     bodies = "".join(
-        f'<body name="{n}"><freejoint/><geom {g} rgba=".3 .5 .8 1"/></body>' for n, (g, _, _) in OBJECTS.items()
+        f'<body name="{n}"><freejoint/>{g}</body>' for n, (g, _, _) in OBJECTS.items()
     )
     return f"""
 <mujoco>
   <visual><global offwidth="{W}" offheight="{H}"/></visual>
+  <default><geom rgba=".3 .5 .8 1"/></default>
   <worldbody>
     <light pos="0 0 2"/>
     <geom name="table" type="plane" size="1 1 0.01"/>
@@ -86,7 +109,7 @@ def place(model: mujoco.MjModel, data: mujoco.MjData, rng: np.random.Generator) 
         yaw = rng.uniform(-math.pi, math.pi)
         lying = can_lie and rng.random() < 0.5
         if prim.kind == "cylinder":
-            half, z = (prim.radius, prim.radius) if lying else (prim.half_length, prim.half_length)
+            z = prim.radius if lying else prim.half_length
         elif prim.kind == "box":
             z = prim.half_extents[2]
         else:

@@ -177,8 +177,8 @@ def features(
     else:
         s = FitSettings(inlier_tol=cfg.inlier_tol)
         q = p[np.linspace(0, n - 1, cfg.fit_points).round().astype(np.int64)] if n > cfg.fit_points else p
-        accept = (lambda f: see_through(f, views, cfg) <= cfg.max_see_through) if views else None
-        fit, rejected = fit_primitive(q, primitive, axes, s, accept)  # type: ignore[arg-type]
+        seen = (lambda f: see_through(f, views, cfg)) if views else None
+        fit, rejected = fit_primitive(q, primitive, axes, s, seen, cfg.max_see_through)  # type: ignore[arg-type]
         if fit is None:
             note = f"{kind} fit contradicts the views" if rejected else f"{kind} fit did not converge"
         elif fit.inliers < cfg.min_inliers:

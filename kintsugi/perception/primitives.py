@@ -188,14 +188,11 @@ def box_sdf(x: np.ndarray, he: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     s = np.where(x >= 0.0, 1.0, -1.0)
     q = np.abs(x) - he
     out = np.maximum(q, 0.0)
-    dist_out = np.linalg.norm(out, axis=1)
-    k = np.argmax(q, axis=1)
-    rows = np.arange(len(x))
-    d = np.where(dist_out > 0.0, dist_out, q[rows, k])
-    g = np.zeros_like(x)
-    g[rows, k] = s[rows, k]
+    dist_out = np.sqrt((out * out).sum(axis=1))
     outside = dist_out > 0.0
-    g[outside] = s[outside] * out[outside] / dist_out[outside, None]
+    nearest_face = np.arange(3) == q.argmax(axis=1)[:, None]  # inside: the gradient points out of the nearest face
+    d = np.where(outside, dist_out, q.max(axis=1))
+    g = s * np.where(outside[:, None], out / np.where(outside, dist_out, 1.0)[:, None], nearest_face)
     return d, g
 
 
@@ -295,14 +292,15 @@ def _good(f: Fit, s: FitSettings) -> bool:
 
 
 UP = np.array([0.0, 0.0, 1.0])
-Accept = Callable[[Fit], bool]
+Contradiction = Callable[[Fit], float]
 
 
 def _rim_start(p: np.ndarray, a: np.ndarray, depth: float, radius: float | None = None, band: float = 0.005) -> np.ndarray:
-    """Initial centre of a container opening towards a, from its rim: the band of points at the extreme
-    along a. A round rim's centre is the centre of the circle through those points (an algebraic fit,
-    right even for a partly seen rim); otherwise their mean. A thin wall's inner and outer faces are
-    parallel, so a start off by about a wall thickness can settle with the two faces swapped."""
+    """Initial centre `depth` behind the object's end towards a: the centre of the band of points at
+    the extreme along a (a face, or a container's rim). Round: the centre of the circle through those
+    points (an algebraic fit, right even for a partly seen rim); otherwise their mean. A face seen whole
+    fixes the lateral position that surface points alone leave free (a plate's top), and a thin wall's
+    parallel inner and outer faces could otherwise settle swapped."""
     t = p @ a
     rim = p[t >= t.max() - band]
     centre = rim.mean(axis=0)
@@ -372,15 +370,22 @@ def _sphere_attempt(p: np.ndarray, radius: float, s: FitSettings):
 
 
 def fit_primitive(
-    p: np.ndarray, primitive: Primitive, pca_axes: np.ndarray, s: FitSettings, accept: Accept | None = None
+    p: np.ndarray,
+    primitive: Primitive,
+    pca_axes: np.ndarray,
+    s: FitSettings,
+    contradiction: Contradiction | None = None,
+    max_contradiction: float = 0.05,
 ) -> tuple[Fit | None, int]:
-    """Best fit of a known primitive over a few starts, and how many fits `accept` rejected.
+    """Best fit of a known primitive over a few starts, and how many fits were refused.
 
-    Starts run in order of likelihood and stop at the first clean fit that `accept`
-    (e.g. a check against what the cameras saw) lets through. A container's thin
-    wall has parallel inner and outer faces, so the points alone also fit it about
-    one wall thickness off (faces swapped); when no start gives an accepted clean
-    fit, the best fits are retried one wall thickness away to each side.
+    `contradiction(fit)` scores a fit against other evidence (the share of its surface
+    the cameras saw through); above `max_contradiction` a fit is refused. Starts run in
+    order of likelihood and stop at the first clean, uncontradicted fit; otherwise the
+    best accepted one wins (most inliers, then least contradicted, then lowest RMS).
+    A container's thin wall has parallel inner and outer faces, so the points alone
+    also fit it about one wall thickness off (faces swapped); without a clean fit, the
+    best one is retried one wall thickness away along each of its axes.
     """
     wall = primitive.wall
     if primitive.kind == "cylinder":
@@ -397,8 +402,11 @@ def fit_primitive(
         def cyl(a: np.ndarray, c0: np.ndarray | None = None):
             return _cylinder_attempt(p, r, h, wall, a, s, c0)
 
-        if wall is None:
+        if wall is None and h is None:
             attempts = [cyl(a) for a in axes]
+        elif wall is None:  # centred below the upper end's face first (a face seen whole fixes the centre)
+            ups = [a if a[2] >= 0 else -a for a in axes]
+            attempts = [cyl(a, _rim_start(p, a, h, r)) for a in ups] + [cyl(a) for a in axes]
         else:  # a container's two ends differ: each axis both ways, centred on its rim
             attempts = [cyl(e, _rim_start(p, e, h, r)) for a in axes for e in (a, -a)]  # type: ignore[arg-type]
 
@@ -408,8 +416,13 @@ def fit_primitive(
     elif primitive.kind == "box":
         he = np.asarray(primitive.half_extents, float)
         frames = box_starts(pca_axes, p, he)
-        if wall is None:
-            attempts = [_box_attempt(p, he, None, r0, s) for r0 in frames]
+        if wall is None:  # centred below the top face first (seen whole from above, it fixes the centre)
+            attempts = []
+            for r0 in frames:
+                k = int(np.argmax(np.abs(r0[2])))
+                up = r0[:, k] * np.sign(r0[2, k])
+                attempts.append(_box_attempt(p, he, None, r0, s, _rim_start(p, up, he[k])))
+            attempts += [_box_attempt(p, he, None, r0, s) for r0 in frames]
         else:  # open side up first, then upside down
             frames = [f for r0 in frames for f in (r0, r0 * [1.0, -1.0, -1.0])]
             attempts = [_box_attempt(p, he, wall, r0, s, _rim_start(p, r0[:, 2], he[2])) for r0 in frames]
@@ -422,29 +435,30 @@ def fit_primitive(
     else:
         return None, 0
 
-    fits: list[Fit] = []
-    tried: list[Fit] = []
-    rejected = 0
+    accepted: list[tuple[Fit, float]] = []
+    tried: list[tuple[Fit, float]] = []
+
+    def rank(fc: tuple[Fit, float]) -> tuple[float, float, float]:
+        return (round(fc[0].inliers, 1), -round(fc[1], 2), -fc[0].rms)
 
     def run(batch) -> bool:
-        nonlocal rejected
         for attempt in batch:
             fit = attempt()
             if fit is None:
                 continue
-            tried.append(fit)
-            if accept is not None and not accept(fit):
-                rejected += 1
-                continue
-            fits.append(fit)
-            if _good(fit, s):
-                return True
+            c = contradiction(fit) if contradiction is not None else 0.0
+            tried.append((fit, c))
+            if c <= max_contradiction:
+                accepted.append((fit, c))
+                if _good(fit, s) and c <= max_contradiction / 5:
+                    return True
         return False
 
-    if not run(attempts) and wall is not None:
-        best = sorted(tried, key=lambda f: (-round(f.inliers, 2), f.rms))[:2]
-        run([hop(f, f.centre + sign * wall * f.frame[:, k]) for f in best for k in (0, 1) for sign in (1.0, -1.0)])
-    return max(fits, key=lambda f: (round(f.inliers, 2), -f.rms), default=None), rejected
+    if not run(attempts) and wall is not None and tried:
+        f = max(tried, key=rank)[0]
+        run([hop(f, f.centre + sign * wall * f.frame[:, k]) for k in range(3) for sign in (1.0, -1.0)])
+    best = max(accepted, key=rank, default=None)
+    return (best[0] if best else None), len(tried) - len(accepted)
 
 
 def surface_samples(fit: Fit, inset: float) -> np.ndarray:

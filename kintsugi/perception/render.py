@@ -70,9 +70,11 @@ class SegDepthRenderer:
         return (d / (self._depth.astype(np.float64) + c)).astype(np.float32)
 
     def _segmentation(self) -> np.ndarray:
-        rgb = self._rgb.astype(np.int32)
-        segid = rgb[..., 0] | (rgb[..., 1] << 8) | (rgb[..., 2] << 16)  # 0 = background, else geom segid + 1
         n = self._scene.ngeom
+        rgb = self._rgb
+        segid = rgb[..., 0] | (rgb[..., 1].astype(np.int32) << 8)  # 0 = background, else geom segid + 1
+        if n >= 2**16 - 1:
+            segid |= rgb[..., 2].astype(np.int32) << 16
         table = np.full((n + 1, 2), -1, np.int32)
         for g in self._scene.geoms[:n]:
             if g.segid >= 0:
