@@ -57,9 +57,15 @@ def shape_of(kind: str, objects: ObjectsSection) -> Shape:
     return Shape("box", half_extents=s)
 
 
+ROLLING = ("bottle", "cup", "capsule", "plate")
+"""Round objects get condim 6 (rolling friction, taken from the table) so that, fallen, they stop;
+flat-sided ones keep condim 3, which is cheaper."""
+
+
 def _geoms(kind: str, o: ObjectSection) -> list[str]:
     s, rgba, m = o.size_m, f(*o.rgba), o.mass_kg
-    common = f'rgba="{rgba}" friction="{o.friction:.6g} 0.005 0.0001"'
+    condim = 6 if kind in ROLLING else 3
+    common = f'rgba="{rgba}" friction="{o.friction:.6g} 0.005 0.0001" condim="{condim}"'
     if kind in ("bottle", "plate", "capsule"):
         return [f'<geom name="{kind}_body" type="cylinder" size="{f(s[0], s[1])}" mass="{m:.6g}" {common}/>']
     if kind == "cup":
@@ -96,10 +102,11 @@ def _geoms(kind: str, o: ObjectSection) -> list[str]:
         z0 = -rim / 2
         out = [f'<geom name="tray_base" type="box" size="{f(hx, hy, base_t)}" pos="0 0 {z0 + base_t:.6g}" '
                f'mass="{0.6 * m:.6g}" {common}/>']
-        rz = z0 + rim / 2
+        wall = (rim - 2 * base_t) / 2  # rims stand on the base, clear of the table (fewer contacts)
+        rz = z0 + 2 * base_t + wall
         for name, size, pos in (
-            ("front", (t, hy, rim / 2), (hx - t, 0, rz)), ("back", (t, hy, rim / 2), (-hx + t, 0, rz)),
-            ("left", (hx, t, rim / 2), (0, hy - t, rz)), ("right", (hx, t, rim / 2), (0, -hy + t, rz)),
+            ("front", (t, hy, wall), (hx - t, 0, rz)), ("back", (t, hy, wall), (-hx + t, 0, rz)),
+            ("left", (hx, t, wall), (0, hy - t, rz)), ("right", (hx, t, wall), (0, -hy + t, rz)),
         ):
             out.append(f'<geom name="tray_rim_{name}" type="box" size="{f(*size)}" pos="{f(*pos)}" '
                        f'mass="{0.1 * m:.6g}" {common}/>')
