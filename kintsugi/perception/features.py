@@ -2,9 +2,10 @@
 
 Task-free and perceived only: a cloud fused from segmentation + depth renders
 (`object_cloud`), plus the object's known shape from the catalogue
-(`Primitive`). Everything is in metres, in the world frame. When the shape
-fixes the pose, the features come from the fitted primitive (`fit="primitive"`);
-otherwise, or when that fit fails, from the raw cloud (`fit="raw"`, with a note).
+(`Primitive`, possibly a container). Everything is in metres, in the world frame.
+When the shape fixes the pose, the features come from the fitted primitive
+(`fit="primitive"`); otherwise, or when that fit fails or contradicts what the
+cameras saw, from the raw cloud (`fit="raw"`, with a note saying why).
 """
 
 from __future__ import annotations
@@ -33,6 +34,8 @@ __all__ = [
     "object_cloud",
     "object_clouds",
     "render_view",
+    "see_through",
+    "sign_normalized",
 ]
 
 Vec3 = tuple[float, float, float]
