@@ -17,6 +17,7 @@ from kintsugi.tasks.tabletop.arm_model import f
 from kintsugi.tasks.tabletop.config import ObjectSection, ObjectsSection
 
 CUP_SEGMENTS = 12
+TRAY_WALL = 0.006
 
 
 @dataclass(frozen=True)
@@ -28,14 +29,19 @@ class Shape:
     half_height: float = 0.0
     half_extents: tuple[float, float, float] = (0.0, 0.0, 0.0)
     grasp: Literal["side_if_upright", "top"] = "top"
-    hollow: bool = False
-    """Open containers: cameras see inside, so a solid primitive must not be checked against the views."""
+    fit: bool = True
+    """False for shapes a primitive describes badly (a fork's wide head on a narrow handle):
+    perception then reports raw cloud features instead of a misfitted box."""
+    wall: float | None = None
+    """Open containers (cup, tray): wall and floor thickness; perception fits the solid minus its cavity."""
 
     def primitive(self) -> Primitive:
         """The shape as the perception catalogue states it (what a fit may assume)."""
+        if not self.fit:
+            return Primitive()
         if self.kind == "cylinder":
-            return Primitive.cylinder(self.radius, self.half_height)
-        return Primitive.box(*self.half_extents)
+            return Primitive.cylinder(self.radius, self.half_height, wall=self.wall)
+        return Primitive.box(*self.half_extents, wall=self.wall)
 
     @property
     def rest_height(self) -> float:
@@ -46,14 +52,15 @@ class Shape:
 def shape_of(kind: str, objects: ObjectsSection) -> Shape:
     s = getattr(objects, kind).size_m
     if kind in ("bottle", "cup"):
-        return Shape("cylinder", radius=s[0], half_height=s[1], grasp="side_if_upright", hollow=kind == "cup")
+        return Shape("cylinder", radius=s[0], half_height=s[1], grasp="side_if_upright",
+                     wall=s[2] if kind == "cup" else None)
     if kind in ("plate", "capsule"):
         return Shape("cylinder", radius=s[0], half_height=s[1])
     if kind in ("fork", "spoon"):
         head = 0.03 if kind == "fork" else 0.022
-        return Shape("box", half_extents=(s[0] + head, s[1] * 1.8, s[2]))
+        return Shape("box", half_extents=(s[0] + head, s[1] * 1.8, s[2]), fit=False)
     if kind == "tray":
-        return Shape("box", half_extents=(s[0], s[1], s[2] / 2))
+        return Shape("box", half_extents=(s[0], s[1], s[2] / 2), wall=TRAY_WALL)
     return Shape("box", half_extents=s)
 
 
@@ -70,7 +77,7 @@ def _geoms(kind: str, o: ObjectSection) -> list[str]:
         return [f'<geom name="{kind}_body" type="cylinder" size="{f(s[0], s[1])}" mass="{m:.6g}" {common}/>']
     if kind == "cup":
         r, hh, wall = s
-        floor = 0.003
+        floor = wall / 2  # half thickness: the floor is as thick as the wall
         out = [f'<geom name="cup_floor" type="cylinder" size="{f(r, floor)}" pos="0 0 {-hh + floor:.6g}" '
                f'mass="{0.3 * m:.6g}" {common}/>']
         wall_hh = hh - floor
@@ -98,7 +105,7 @@ def _geoms(kind: str, o: ObjectSection) -> list[str]:
         return [handle, tip]
     if kind == "tray":
         hx, hy, rim = s
-        base_t, t = 0.005, 0.006
+        base_t = t = TRAY_WALL / 2
         z0 = -rim / 2
         out = [f'<geom name="tray_base" type="box" size="{f(hx, hy, base_t)}" pos="0 0 {z0 + base_t:.6g}" '
                f'mass="{0.6 * m:.6g}" {common}/>']

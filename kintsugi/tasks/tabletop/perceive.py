@@ -10,6 +10,7 @@ simulator's object poses (the paper's simulation setting), marked `note="ground 
 from __future__ import annotations
 
 import math
+from typing import Iterable
 
 import numpy as np
 
@@ -30,14 +31,17 @@ class ObjectPerception:
         self._geoms = {k: {int(g) for g in np.flatnonzero(world.geom_object == i)} for i, k in enumerate(world.objects)}
         self._shapes = world.shapes
 
-    def features(self) -> dict[str, ObjectFeatures]:
+    def features(self, names: Iterable[str] | None = None) -> dict[str, ObjectFeatures]:
+        """Features of the named objects (all by default): fitting costs per object, so ask for few."""
+        wanted = [k for k in self._world.objects if names is None or k in set(names)]
         if self.mode == "truth":
-            return truth_features(self._world.ground_truth(), self._shapes)
+            truth = self._world.ground_truth()
+            return truth_features(truth.model_copy(update={"objects": {k: truth.objects[k] for k in wanted}}),
+                                  self._shapes)
         w = self._world
         views = [render_view(w.seg_depth_renderer, w.data, cam) for cam in CAMERAS]
-        clouds = object_clouds(views, self._geoms)
-        return {k: features(k, clouds[k], self._shapes[k].primitive(), views=None if self._shapes[k].hollow else views)
-                for k in w.objects}
+        clouds = object_clouds(views, {k: self._geoms[k] for k in wanted})
+        return {k: features(k, clouds[k], self._shapes[k].primitive(), views=views) for k in wanted}
 
 
 def truth_features(truth: GroundTruth, shapes: dict[str, Shape]) -> dict[str, ObjectFeatures]:

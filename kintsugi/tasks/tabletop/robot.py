@@ -9,7 +9,7 @@ in every observation's `features_source`).
 
 from __future__ import annotations
 
-from typing import Any, Callable, Literal, Protocol
+from typing import Any, Callable, Iterable, Literal, Protocol
 
 import cv2
 import numpy as np
@@ -103,8 +103,9 @@ class TabletopRobot:
         return float(self._world.data.time)
 
     # --- sensing ------------------------------------------------------------------
-    def features(self) -> dict[str, ObjectFeatures]:
-        return self._perception.features()
+    def features(self, names: Iterable[str] | None = None) -> dict[str, ObjectFeatures]:
+        """Object features as the configured source gives them (perceived by default)."""
+        return self._perception.features(names)
 
     def arm_state(self, arm: str) -> ArmState:
         w = self._world
@@ -136,7 +137,11 @@ class TabletopRobot:
         arms = tuple(p.arm for p in parts)
         self.last_action = action.action
         steps0, t0 = self._world.steps, self.sim_time
-        feats = self.features() if any(p.action in NEEDS_FEATURES for p in parts) else None
+        feats = None
+        if any(p.action in NEEDS_FEATURES for p in parts):  # perceive only what the action refers to
+            needed = {o for p in parts for o in p.objects}
+            needed |= {k for p in parts if p.action == "place" for k in self._world.pad_contacts(p.arm)[0]}
+            feats = self._perception.features(needed)
         self._planner.clipped = False
         try:
             programs = {p.arm: self._planner.plan(p, self._arm_view(p.arm), feats) for p in parts}
