@@ -11,7 +11,8 @@ from __future__ import annotations
 import mujoco
 
 TABLE_FRICTION = 0.1
-BOX_HALF = 0.05
+BOX_HALF = (0.05, 0.05, 0.025)  # flat, so a push at mid-height cannot tip it
+PUSHER_RADIUS = 0.025
 
 
 def pusher_box_xml(
@@ -29,16 +30,16 @@ def pusher_box_xml(
   <option timestep="{timestep}" cone="elliptic" impratio="3"/>
   <worldbody>
     <geom name="table" type="plane" size="2 2 0.1" friction="{TABLE_FRICTION} 0.005 0.0001"/>
-    <body name="pusher" pos="0 0 0.04">
+    <body name="pusher" pos="0 0 {BOX_HALF[2]}">
       <joint name="px" type="slide" axis="1 0 0" damping="1"/>
       <joint name="py" type="slide" axis="0 1 0" damping="1"/>
-      <geom name="pusher" type="sphere" size="0.03" mass="1" friction="{TABLE_FRICTION} 0.005 0.0001"
+      <geom name="pusher" type="sphere" size="{PUSHER_RADIUS}" mass="1" friction="{TABLE_FRICTION} 0.005 0.0001"
             contype="1" conaffinity="1"/>
       <site name="tip"/>
     </body>
-    <body name="box" pos="{box_x} 0 {BOX_HALF}">
+    <body name="box" pos="{box_x} 0 {BOX_HALF[2]}">
       <freejoint name="box"/>
-      <geom name="box" type="box" size="{BOX_HALF} {BOX_HALF} {BOX_HALF}" mass="{box_mass}"
+      <geom name="box" type="box" size="{BOX_HALF[0]} {BOX_HALF[1]} {BOX_HALF[2]}" mass="{box_mass}"
             friction="{box_friction} 0.005 0.0001"/>
     </body>
   </worldbody>
