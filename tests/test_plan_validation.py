@@ -245,7 +245,7 @@ def test_plan_not_ending_with_insert_is_noted() -> None:
         (plan(("insert", {"y": 3.0})), "does not control axis 'y'"),
         (plan(("align", {"y": float("nan")})), "not a finite number"),
         (plan(("align", {"y": float("inf")})), "not a finite number"),
-        (PlanReply.model_construct(steps=[PlanStep.model_construct(skill="grasp", goal={})]), "unknown skill 'grasp'"),
+        (PlanReply.model_construct(steps=[PlanStep.model_construct(skill="grasp", goal={})]), "skill 'grasp' is unknown"),
     ],
 )
 def test_structural_problems_are_rejected(reply: PlanReply, message: str) -> None:
@@ -255,7 +255,7 @@ def test_structural_problems_are_rejected(reply: PlanReply, message: str) -> Non
 
 def test_skill_missing_from_request_is_rejected() -> None:
     req = request().model_copy(update={"skills": {"fit": ["y"], "insert": ["z"]}})
-    with pytest.raises(PlanInvalid, match="unknown skill 'align'.*fit \\['y'\\], insert \\['z'\\]"):
+    with pytest.raises(PlanInvalid, match="skill 'align' is not allowed.*fit \\['y'\\], insert \\['z'\\]"):
         validate_plan(plan(("align", {"y": 12.0})), req)
     no_goal = request().model_copy(update={"goals": {"fit": Pose(y=0, z=0), "align": Pose(y=0, z=0)}})
     with pytest.raises(PlanInvalid, match="no current goal for skill 'insert'"):

@@ -15,7 +15,8 @@ from pydantic import Field
 from kintsugi.config import StrictModel
 
 Role = Literal["judge", "analyze", "plan"]
-RecoverySkill = Literal["fit", "align", "insert"]
+RecoverySkill = Literal["approach", "contact", "fit", "align", "insert"]
+"""Every skill a plan may name; a request's `skills` says which of them this robot's recovery allows."""
 Axis = Literal["y", "z", "roll"]
 
 
@@ -111,6 +112,12 @@ class RobotDescription(StrictModel):
                     "with); a tip that drops into the hole relieves part of it")
     compression_limit_mm: float = Field(description="a skill halts at once when the wrist is compressed beyond this")
     pose_tol_mm: float = Field(description="a goal counts as reached within this distance")
+    insert_depth_mm: float = Field(
+        description="the task's depth: inserted means the peg tip at least this far below the board top, "
+                    "inside the opening")
+    insert_max_tilt_deg: float = Field(
+        description="the task's tilt bound: inserted means the peg axis within this of vertical (a peg tilted "
+                    "further is wedged against the walls, not inserted)")
     vision: PerceptionConfig = Field(description="the settings the vision checks measure the images with")
 
     @property
@@ -146,6 +153,9 @@ class SkillOutcome(StrictModel):
     compression_limit: bool
     wrist_force_z_n: float = 0.0
     image_png: bytes = Field(repr=False)
+    side_image_png: bytes | None = Field(
+        default=None, repr=False,
+        description="the side camera's image (the x-z plane, image right = +x), when the robot has one")
 
 
 class JudgeRequest(StrictModel):
@@ -155,6 +165,8 @@ class JudgeRequest(StrictModel):
     success_criteria: str
     goal_image_png: bytes | None = Field(default=None, repr=False)
     calibration: CameraCalibration
+    side_calibration: CameraCalibration | None = Field(
+        default=None, description="the side camera's calibration (its horizontal axis is x: to_plane gives x, z)")
     robot: RobotDescription | None = Field(
         default=None, description="the robot's own description; None when the caller does not describe it")
 
@@ -182,9 +194,11 @@ class AnalyzeRequest(StrictModel):
     goals: dict[str, Pose]
     history: list[Attempt]
     calibration: CameraCalibration
+    side_calibration: CameraCalibration | None = Field(
+        default=None, description="the side camera's calibration (its horizontal axis is x: to_plane gives x, z)")
     max_step_mm: float
     skills: dict[str, list[Axis]] = Field(
-        default_factory=dict, description="recovery skill -> the axes it controls (fit [y], align [y], insert [z])"
+        default_factory=dict, description="skills a recovery plan may use -> the axes each controls"
     )
     goal_image_png: bytes | None = Field(
         default=None, repr=False, description="I_g: the failed skill's terminal image in the default condition"

@@ -1,9 +1,10 @@
 """Last line of defence between a reasoner's plan and the robot.
 
-Structural problems (unknown skills, axes a skill does not own, non-finite
-numbers) are rejected with `PlanInvalid`, so a backend can ask the model to
-repair its reply. Numeric overreach is never rejected but clamped: each goal
-may move at most `max_step_mm` from the skill's current goal (the paper's one
+Structural problems (skills the request does not allow, i.e. outside
+`recovery.skills`, axes a skill does not own, non-finite numbers) are rejected
+with `PlanInvalid`, so a backend can ask the model to repair its reply. Numeric
+overreach is never rejected but clamped: each goal may move at most
+`max_step_mm` (degrees for roll) from the skill's current goal (the paper's one
 real-robot failure was an over-large update) and must stay in the workspace.
 Every clamp is written down in `ValidatedPlan.notes`.
 """
@@ -12,7 +13,7 @@ from __future__ import annotations
 
 import json
 import math
-from typing import Any
+from typing import Any, get_args
 
 from annotated_types import MaxLen
 from pydantic import ValidationError
@@ -26,6 +27,7 @@ from kintsugi.reasoning.types import (
     PlanReply,
     PlanRequest,
     Pose,
+    RecoverySkill,
 )
 
 
@@ -36,6 +38,7 @@ def _max_plan_steps() -> int:
     raise RuntimeError("PlanReply.steps has no max_length; validation needs one")
 
 
+SKILL_NAMES: tuple[str, ...] = get_args(RecoverySkill)
 MAX_PLAN_STEPS = _max_plan_steps()
 """Same limit as the PlanReply schema, so validation and parsing agree."""
 
@@ -101,7 +104,8 @@ def validate_plan(reply: PlanReply, request: PlanRequest) -> ValidatedPlan:
     for i, step in enumerate(steps_in):
         where = f"step {i + 1} ({step.skill})"
         if step.skill not in request.skills:
-            raise PlanInvalid(f"{where}: unknown skill {step.skill!r}; use only these skills and axes: {known}")
+            what = "is not allowed in this robot's recovery plans" if step.skill in SKILL_NAMES else "is unknown"
+            raise PlanInvalid(f"{where}: skill {step.skill!r} {what}; use only these skills and axes: {known}")
         owned = request.skills[step.skill]
         current = request.goals.get(step.skill)
         if current is None:

@@ -20,14 +20,17 @@ import numpy as np
 from kintsugi.errors import ConfigError
 from kintsugi.tasks.peg.config import PegTaskConfig
 from kintsugi.tasks.peg.goals import DEFAULT_GOALS_FILE, full_goals, load_goals
+from kintsugi.tasks.peg.robot import insert_requirements
 from kintsugi.tasks.peg.skills import SEQUENCE, execute_skill
 from kintsugi.tasks.peg.world import HOME_POSE, PegWorld, TrialParams
 from kintsugi.trial import ReasonerSettings
 
 TASK_TEXT = (
-    "Insert the {shape} peg held by the soft-wrist gripper into the hole in the board, "
-    "at least 10 mm deep, using the contact-formation skills approach, contact, fit, align, insert."
+    "Insert the {shape} peg held by the soft-wrist gripper into the hole in the board: its tip at least "
+    "{depth:g} mm below the board top inside the opening, and its axis within {tilt:.1f} degrees of vertical. "
+    "Use the contact-formation skills approach, contact, fit, align, insert."
 )
+"""Depth and tilt come from the config's scoring values (what ground truth G checks); never the randomization."""
 TEACH_SCRIPT = "bench/teach_goals.py"
 
 
@@ -45,7 +48,8 @@ class PegContext:
 
     @property
     def task_text(self) -> str:
-        return TASK_TEXT.format(shape=self.shape)
+        depth, tilt = insert_requirements(self.cfg)
+        return TASK_TEXT.format(shape=self.shape, depth=round(depth, 1), tilt=tilt)
 
     def full_goals(self) -> dict[str, np.ndarray]:
         return full_goals(self.goals, HOME_POSE)

@@ -29,6 +29,8 @@ class PegRobot:
         self._on_tick = on_tick
         self._cfg = world.cfg
         self.calibration: CameraCalibration = world.calibration()
+        self.side_calibration: CameraCalibration | None = world.side_calibration() if world.has_side_view else None
+        """The optional side camera (x-z plane); None when the robot has none (the paper's setup)."""
         self.shape = shape
         self.skill_axes = {name: list(spec.axes) for name, spec in SKILLS.items()}
         self.current_skill = ""
@@ -43,6 +45,10 @@ class PegRobot:
 
     def image(self) -> np.ndarray:
         return self._world.render()
+
+    def side_image(self) -> np.ndarray | None:
+        """The side camera's view, or None without one."""
+        return self._world.render_side() if self.side_calibration is not None else None
 
     def wrist_force_z(self) -> float:
         """Tared wrist force along z (N), as the arm's F/T sensor reports it."""
@@ -66,6 +72,7 @@ def describe_robot(cfg: PegTaskConfig, shape: str, goals: dict[str, dict[str, fl
     `perception.board_surface_z_mm`). Nothing here reads a world or a trial's parameters.
     """
     peg = peg_shape(shape, cfg)
+    depth_mm, tilt_deg = insert_requirements(cfg)
     width_mm = 2 * peg.half_y / MM
     lever_mm = cfg.wrist.hinge_to_grasp_mm + cfg.peg.length_mm
     contact = full_goals(goals, HOME_POSE)["contact"]
@@ -79,8 +86,20 @@ def describe_robot(cfg: PegTaskConfig, shape: str, goals: dict[str, dict[str, fl
         wrist_roll_stiffness_nm_per_rad=cfg.wrist.roll_stiffness,
         contact_press_mm=round(lowest_mm - base_above_surface_mm, 3),
         compression_limit_mm=cfg.control.compression_limit_mm, pose_tol_mm=cfg.control.pose_tol_mm,
-        vision=cfg.perception,
+        insert_depth_mm=round(depth_mm, 3), insert_max_tilt_deg=round(tilt_deg, 3), vision=cfg.perception,
     )
+
+
+def insert_requirements(cfg: PegTaskConfig) -> tuple[float, float]:
+    """(depth mm, tilt deg) the task asks of an inserted peg, from the config's scoring values: the tip
+    `scoring.min_depth_fraction` of the hole depth down, and the axis within `scoring.max_tilt_deg`, by
+    default atan(clearance / that depth), the largest tilt a rigid peg seated that deep can have across
+    the hole's flats."""
+    depth = cfg.scoring.min_depth_fraction * cfg.hole.depth_mm
+    tilt = cfg.scoring.max_tilt_deg
+    if tilt is None:
+        tilt = math.degrees(math.atan2(cfg.peg.clearance_mm, depth))
+    return depth, tilt
 
 
 def to_pose(v: np.ndarray) -> Pose:
