@@ -96,7 +96,7 @@ class TabletopRobot:
         self.objects: tuple[str, ...] = world.objects
         self.features_source = self._perception.mode
         self.bases = {arm: np.array(base_position(cfg.robot, arm)) for arm in ARMS}
-        self.last_action = ""
+        self.cameras = CAMERAS
 
     @property
     def sim_time(self) -> float:
@@ -135,7 +135,6 @@ class TabletopRobot:
             action = parse_action(action, self.objects)
         parts = [a for a in (action.left, action.right) if a is not None] if isinstance(action, Drive) else [action]
         arms = tuple(p.arm for p in parts)
-        self.last_action = action.action
         steps0, t0 = self._world.steps, self.sim_time
         feats = None
         if any(p.action in NEEDS_FEATURES for p in parts):  # perceive only what the action refers to
@@ -156,7 +155,8 @@ class TabletopRobot:
         rot_err = max((r.rot_err_deg for rs in reports.values() for r in rs), default=0.0)
         settled = all(r.settled for rs in reports.values() for r in rs)
         reached = settled and pos_err <= self._motion.reach_tol_m and rot_err <= self._motion.reach_tol_deg
-        msg = f"pose error {pos_err * 1000:.1f} mm, {rot_err:.1f} deg" + ("" if settled else ", not settled")
+        msg = (f"pose error {pos_err * 1000:.1f} mm, {rot_err:.1f} deg" + ("" if settled else ", not settled")
+               + (", target clipped to the workspace" if self._planner.clipped else ""))
         return ActionResult(action=action.action, arms=arms, reached=reached, clipped=self._planner.clipped,
                             steps=self._world.steps - steps0, sim_time=self.sim_time - t0, pos_err_m=pos_err,
                             rot_err_deg=rot_err, message=msg)

@@ -248,6 +248,8 @@ class TabletopWorld:
 
     def render(self, camera: str, view: View = "rgb") -> np.ndarray:
         """rgb (H, W, 3) uint8; depth (H, W) metres; seg (H, W) geom id per pixel, -1 for background."""
+        if camera not in self.cameras:
+            raise UnknownNameError(f"no camera named {camera!r}; known: {', '.join(self.cameras)}")
         r = self.renderer
         r.disable_depth_rendering()
         r.disable_segmentation_rendering()
