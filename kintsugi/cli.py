@@ -163,12 +163,18 @@ def run(
 @app.command()
 def bench(
     task: Annotated[str, typer.Argument(help="registered task")],
-    methods: Annotated[str, typer.Option(help="comma-separated methods")] = "baseline",
-    shapes: Annotated[str, typer.Option("--shapes", "--variants", help="comma-separated variants")] = "round",
-    conditions: Annotated[str, typer.Option(help="comma-separated conditions")] = "none,friction,pose,all",
-    trials: Annotated[int, typer.Option(min=1, help="trials per cell")] = 30,
+    suite: Annotated[Optional[str], typer.Option(
+        help="a named campaign of the task (e.g. peg-insertion's `stretch`): its methods, variants, conditions, "
+             "trials and config; options given here go on top")] = None,
+    methods: Annotated[Optional[str], typer.Option(help="comma-separated methods [default: baseline]")] = None,
+    shapes: Annotated[Optional[str], typer.Option(
+        "--shapes", "--variants", help="comma-separated variants [default: round]")] = None,
+    conditions: Annotated[Optional[str], typer.Option(
+        help="comma-separated conditions [default: none,friction,pose,all]")] = None,
+    trials: Annotated[Optional[int], typer.Option(min=1, help="trials per cell [default: 30]")] = None,
     workers: Annotated[int, typer.Option(min=1, help="parallel worker processes")] = 2,
-    out: Annotated[Path, typer.Option(help="campaign directory (results.jsonl, report)")] = Path("runs/campaign"),
+    out: Annotated[Optional[Path], typer.Option(
+        help="campaign directory (results.jsonl, report) [default: runs/campaign, or runs/<suite>]")] = None,
     executor: Annotated[str, typer.Option(help="process (default), inline, or ray")] = "process",
     base_seed: Annotated[int, typer.Option(min=0, help="trial i of every cell uses seed base_seed + i, "
                                                        "so methods meet the same random draws")] = 0,
@@ -185,16 +191,23 @@ def bench(
 
     Every name and setting is checked before the first trial. Exits 1 when any trial errored.
     """
-    from kintsugi.campaign.plan import build_config
+    from kintsugi.campaign.plan import build_config, suite_of
     from kintsugi.campaign.render import print_tables
     from kintsugi.campaign.report import write_report
     from kintsugi.campaign.runner import error_summary, run_campaign
     from kintsugi.campaign.tables import all_tables
 
     try:
+        named = suite_of(task, suite, plugin or []) if suite else None
+        out = out or Path("runs") / (suite or "campaign")
         cfg = build_config(
-            task=task, methods=_csv(methods), variants=_csv(shapes), conditions=_csv(conditions), trials=trials,
-            base_seed=base_seed, overrides=_overrides(set_), plugins=plugin or [],
+            task=task,
+            methods=_csv(methods) if methods else list(named.methods) if named else ["baseline"],
+            variants=_csv(shapes) if shapes else list(named.shapes) if named else ["round"],
+            conditions=(_csv(conditions) if conditions else list(named.conditions) if named
+                        else ["none", "friction", "pose", "all"]),
+            trials=trials or (named.trials if named else 30), base_seed=base_seed,
+            overrides=(dict(named.overrides) if named else {}) | _overrides(set_), plugins=plugin or [],
             reasoner=_reasoner(reasoner, model, base_url, api_key_env, structured_output),
             videos_per_cell=videos_per_cell)
         records = run_campaign(cfg, out, workers=workers, executor=executor)
@@ -204,6 +217,9 @@ def bench(
         _fail(exc)
         return
     console.print(escape(f"results: {out / 'results.jsonl'}   report: {md}, {html}"))
+    if named is not None and named.companion:
+        console.print(escape(f"beside it (same world, other options): kintsugi bench {task} "
+                             f"--suite {named.companion}"))
     errors = error_summary(records)
     if errors:
         _fail(errors, code=1)

@@ -207,6 +207,7 @@ def test_explain_key_accepts_both_forms_and_bad_files_are_one_line_errors(tmp_pa
     (["--videos-per-cell", "-1"], "--videos-per-cell"),
     (["--base-seed", "-1"], "--base-seed"),
     (["--workers", "0"], "--workers"),
+    (["--suite", "strech"], "unknown suite 'strech' for task 'peg-insertion'; known: stretch, stretch-paper"),
 ])
 def test_bench_rejects_bad_input_before_the_first_trial(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,
                                                         args: list[str], message: str) -> None:
@@ -240,6 +241,22 @@ def test_bench_with_errored_trials_says_so_and_exits_nonzero(tmp_path: Path) -> 
     assert "1 of 2 trials errored" in (out / "report.md").read_text()
     res = invoke("report", out)
     assert res.exit_code == 0 and "1 of 2 trials errored" in res.stderr
+
+
+def test_bench_suite_fixes_the_campaign_and_options_go_on_top(tmp_path: Path) -> None:
+    out = tmp_path / "out"
+    res = invoke("bench", "peg-insertion", "--suite", "stretch", "--methods", "recovery", "--shapes", "square",
+                 "--trials", "1", "--executor", "inline", "--set", "peg.clearance_mm=0.5", "--out", out)
+    assert res.exit_code == 0, res.output
+    cfg = json.loads((out / "campaign.json").read_text())["config"]
+    assert cfg["methods"] == ["recovery"] and cfg["variants"] == ["square"] and cfg["conditions"] == ["all"]
+    assert cfg["overrides"]["camera.side_view"] is True and cfg["overrides"]["peg.clearance_mm"] == 0.5
+    assert "kintsugi bench peg-insertion --suite stretch-paper" in res.output
+
+
+def test_bench_suite_of_a_task_without_suites(tmp_path: Path) -> None:
+    res = invoke("bench", "fake-coin", "--plugin", "tests.fake_tasks", "--suite", "stretch", "--out", tmp_path)
+    assert res.exit_code == 2 and "this task has no named suites" in res.output
 
 
 # ----- video -----------------------------------------------------------------------------------

@@ -116,6 +116,22 @@ def validate(cfg: CampaignConfig) -> None:
     make_reasoner(cfg.reasoner)
 
 
+def suite_of(task: str, name: str, plugins: list[str] | tuple[str, ...] = ()) -> Any:
+    """A task's named campaign (methods, variants, conditions, trials, overrides, companion).
+
+    A task offers suites through a `suites` mapping; asking one that has none is a clear error.
+    """
+    from kintsugi.campaign.bootstrap import bootstrap
+    from kintsugi.tasks import TASKS
+
+    bootstrap(plugins, task)
+    suites = getattr(TASKS.get(task).factory(), "suites", None) or {}
+    if name not in suites:
+        known = ", ".join(suites) if suites else "none (this task has no named suites)"
+        raise ConfigError(f"unknown suite {name!r} for task {task!r}; known: {known}")
+    return suites[name]
+
+
 def _known(names: list[str], known: Any, what: str) -> None:
     for name in names:
         if name not in known:

@@ -14,6 +14,7 @@ from kintsugi.tasks.peg.config import CONDITIONS, PegTaskConfig
 from kintsugi.tasks.peg.context import PegContext
 from kintsugi.tasks.peg.robot import PegRobot
 from kintsugi.tasks.peg.shapes import SHAPES_HELP, peg_shape
+from kintsugi.tasks.peg.suites import SUITES
 from kintsugi.tasks.peg.world import PegWorld
 from kintsugi.trial import TrialLog, TrialRecord, TrialSpec
 from kintsugi.video import VideoRecorder
@@ -27,6 +28,8 @@ class PegInsertionTask:
     variants_help = SHAPES_HELP
     default_variants = ("round", "square", "rectangle")
     conditions = CONDITIONS
+    suites = SUITES
+    """Named campaigns, `kintsugi bench peg-insertion --suite stretch`."""
 
     def config(self, overrides: dict | list) -> PegTaskConfig:
         return apply_overrides(PegTaskConfig(), overrides)
