@@ -16,6 +16,7 @@ import pytest
 import kintsugi.tasks.peg.task as task_module
 from kintsugi.tasks import TASKS, load_all
 from kintsugi.tasks.peg.context import PegContext
+from kintsugi.tasks.peg.suites import suite_overrides
 from kintsugi.tasks.peg.world import PegWorld
 from kintsugi.trial import TrialSpec
 
@@ -69,10 +70,10 @@ class PoisonedWorld(PegWorld):
             self._poison()
 
 
-def _records(shape: str, seeds: range) -> list[dict]:
+def _records(shape: str, seeds: range, overrides: dict | None = None) -> list[dict]:
     task = TASKS.get("peg-insertion").factory()
-    return [task.run(TrialSpec(task="peg-insertion", method="recovery", variant=shape, condition="all", seed=s))
-            .without_timings() for s in seeds]
+    return [task.run(TrialSpec(task="peg-insertion", method="recovery", variant=shape, condition="all", seed=s,
+                               overrides=overrides or {})).without_timings() for s in seeds]
 
 
 def test_poison_raises_on_any_use() -> None:
@@ -100,3 +101,15 @@ def test_recovery_records_are_identical_with_the_truth_poisoned(shape: str, monk
     assert sum(sum(r["extra_executions"].values()) for r in normal) > 0
     assert {c["role"] for r in normal for c in r["transcript"]} == {"judge", "analyze", "plan"}
     assert all(r["params"]["shape"] == shape and "tip_depth_mm" in r["params"] for r in poisoned)
+
+
+def test_stretch_options_never_read_the_truth(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Re-approach (which re-locates the hole from the approach image) and the side camera, in the stretch
+    world: identical records with the truth poisoned, and the re-approach path was exercised."""
+    overrides, seeds = suite_overrides("stretch"), range(4)
+    normal = _records("round", seeds, overrides)
+    monkeypatch.setattr(task_module, "PegWorld", PoisonedWorld)
+    poisoned = _records("round", seeds, overrides)
+    assert [r["error"] for r in poisoned] == [None] * len(seeds)
+    assert poisoned == normal
+    assert any("approach" in str(r["transitions"]) for r in normal), [r["transitions"] for r in normal]
