@@ -19,3 +19,15 @@ class SimulationDiverged(KintsugiError):
 
 class ReasoningError(KintsugiError):
     """A reasoner reply could not be parsed or validated, even after one repair attempt."""
+
+
+class SandboxError(KintsugiError):
+    """Model-written code was rejected or failed; `kind` says how (forbidden, syntax, shape, ...), the message
+    says where (line, column) and what to write instead."""
+
+    def __init__(self, kind: str, message: str) -> None:
+        super().__init__(message)
+        self.kind = kind
+
+    def __reduce__(self):  # noqa: ANN204 - picklable across worker processes despite the extra argument
+        return (type(self), (self.kind, str(self)))

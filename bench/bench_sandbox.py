@@ -1,0 +1,106 @@
+"""What sandboxed cost code costs inside MPPI (issue target: <= 10 % of the iteration).
+
+One run, in rotating order so machine drift hits every variant alike: an MPPI step on the
+pusher-and-box scene (K samples, 0.5 s horizon) whose cost is (a) plain numpy written by
+hand and (b) the same cost as model-written source run through the sandbox. Prints medians
+per variant, the sandboxed cost's share of its iteration, the sandbox overhead against the
+hand-written cost, the probe's wall time, the machine, and, last, one JSON line.
+
+    .venv/bin/python bench/bench_sandbox.py [--samples 256] [--steps 30]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+os.environ.setdefault("MUJOCO_GL", "egl")
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+import mujoco  # noqa: E402
+import numpy as np  # noqa: E402
+
+from kintsugi.campaign.report import machine_info  # noqa: E402
+from kintsugi.control import MPPI, MPPIConfig  # noqa: E402
+from kintsugi.sandbox import CostProgram, probe  # noqa: E402
+from tests.control_fixtures import pusher_box  # noqa: E402
+
+GOAL = np.array([0.35, 0.05, 0.025])
+SOURCE = '''
+def push(box, tip, ctrl, goal_pos):
+    """Box to the goal, pusher kept behind the box, small commands."""
+    to_goal = norm(box - goal_pos)
+    behind = norm(tip[..., 0:2] - box[..., 0:2])
+    effort = sum(ctrl ** 2, axis=-1)
+    return mean(to_goal + 0.3 * relu(behind - 0.08) + 0.001 * effort, axis=-1) + 5 * to_goal[:, -1]
+'''
+
+
+def native(box: np.ndarray, tip: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
+    to_goal = np.linalg.norm(box - GOAL, axis=-1)
+    behind = np.linalg.norm(tip[..., 0:2] - box[..., 0:2], axis=-1)
+    effort = np.sum(ctrl ** 2, axis=-1)
+    return np.mean(to_goal + 0.3 * np.maximum(behind - 0.08, 0) + 0.001 * effort, axis=-1) + 5 * to_goal[:, -1]
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--samples", type=int, default=256)
+    ap.add_argument("--steps", type=int, default=30, help="MPPI steps per variant")
+    args = ap.parse_args()
+    source = SOURCE
+    variables = {"box", "tip", "ctrl", "goal_pos"}
+    model, data = pusher_box()
+    K = args.samples
+    program = CostProgram.compile(source, variables)
+    cost_s = {"native": [], "sandbox": []}
+
+    def env(batch):  # noqa: ANN001, ANN202 - a RolloutBatch
+        return {"box": batch.sensor("box_pos"), "tip": batch.sensor("tip_pos"), "ctrl": batch.controls,
+                "goal_pos": GOAL}
+
+    def timed(kind: str):  # noqa: ANN202
+        def cost(batch):  # noqa: ANN001, ANN202
+            e = env(batch)
+            t0 = time.perf_counter()
+            out = native(e["box"], e["tip"], e["ctrl"]) if kind == "native" else program.costs("push", e, K)[0]
+            cost_s[kind].append(time.perf_counter() - t0)
+            return out
+        return cost
+
+    planners = {k: MPPI(model, MPPIConfig(samples=K, horizon_s=0.5, nthread=os.cpu_count()), timed(k))
+                for k in cost_s}
+    step_s = {k: [] for k in cost_s}
+    t_probe = time.perf_counter()
+    sample = {"box": np.zeros((K, 50, 3)), "tip": np.zeros((K, 50, 3)), "ctrl": np.zeros((K, 50, 2)), "goal_pos": GOAL}
+    report = probe(source, variables, {"push": (K,)}, sample)
+    t_probe = time.perf_counter() - t_probe
+    for i in range(args.steps):
+        for kind in (list(cost_s) if i % 2 == 0 else list(cost_s)[::-1]):
+            d = mujoco.MjData(model)
+            mujoco.mj_forward(model, d)
+            planners[kind].step(d)
+            step_s[kind].append(planners[kind].last.total_s)
+    for p in planners.values():
+        p.close()
+    med = {k: float(np.median(v)) for k, v in step_s.items()}
+    cmed = {k: float(np.median(v)) for k, v in cost_s.items()}
+    share = cmed["sandbox"] / med["sandbox"]
+    print(f"machine: {machine_info()}")
+    print(f"K={K}, horizon 0.5 s, {args.steps} steps per variant, medians:")
+    for k in cost_s:
+        print(f"  {k:8s} MPPI step {med[k] * 1000:7.2f} ms   cost {cmed[k] * 1000:6.3f} ms")
+    print(f"sandboxed cost = {share * 100:.2f} % of its MPPI iteration (target <= 10 %); "
+          f"{cmed['sandbox'] / cmed['native']:.2f}x the hand-written numpy cost")
+    print(f"probe (check + compile + child process + {len(report.seconds_per_call)} function): {t_probe * 1000:.0f} ms")
+    print(json.dumps({"samples": K, "step_ms": med["sandbox"] * 1000, "cost_ms": cmed["sandbox"] * 1000,
+                      "cost_share": share, "overhead_vs_numpy": cmed["sandbox"] / cmed["native"],
+                      "probe_ms": t_probe * 1000}))
+
+
+if __name__ == "__main__":
+    main()
