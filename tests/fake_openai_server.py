@@ -16,6 +16,7 @@ import json
 import threading
 import time
 import uuid
+import zlib
 from collections import deque
 from dataclasses import dataclass, field
 from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
@@ -145,6 +146,11 @@ class FakeOpenAIServer:
             def do_POST(self) -> None:  # noqa: N802 - stdlib name
                 length = int(self.headers.get("Content-Length", 0))
                 raw = self.rfile.read(length)
+                if self.path.rstrip("/") == "/v1/embeddings":
+                    body = json.loads(raw)
+                    server.requests.append(body)
+                    self._send(200, _embeddings(body))
+                    return
                 if self.path.rstrip("/") != "/v1/chat/completions":
                     self._send(404, {"error": {"message": f"no route {self.path}", "type": "not_found"}})
                     return
@@ -191,6 +197,19 @@ REFUSALS = {
     ),
 }
 """What `refuse` can name: a test on the request body, and the error message (worded like local servers')."""
+
+
+def _embeddings(body: dict[str, Any]) -> dict[str, Any]:
+    """Deterministic stand-in embeddings: a hashed bag of words (64 dims), so texts sharing words are close."""
+    texts = body["input"] if isinstance(body["input"], list) else [body["input"]]
+    data = []
+    for i, text in enumerate(texts):
+        vec = [0.0] * 64
+        for word in str(text).lower().split():
+            vec[zlib.crc32(word.encode()) % 64] += 1.0
+        data.append({"object": "embedding", "index": i, "embedding": vec})
+    return {"object": "list", "data": data, "model": body.get("model", "fake"),
+            "usage": {"prompt_tokens": 1, "total_tokens": 1}}
 
 
 def _completion(body: dict[str, Any], script: Script) -> dict[str, Any]:
