@@ -106,3 +106,41 @@ def test_hostile_replies_are_a_clear_error_or_bounded(raw: object, as_text: bool
         assert max(DENSITY_BOUNDS_KG_M3[0] * volume, MASS_BOUNDS_KG[0]) - 1e-12 <= p.mass_kg
         assert p.mass_kg <= min(DENSITY_BOUNDS_KG_M3[1] * volume, MASS_BOUNDS_KG[1]) + 1e-12
         assert FRICTION_BOUNDS[0] <= p.friction <= FRICTION_BOUNDS[1]
+
+
+# --- the role on both backends, recorded in the transcript ------------------------------------------
+
+def test_priors_role_embedded_is_recorded() -> None:
+    from kintsugi.reasoning import make_reasoner
+    from kintsugi.reasoning.base import RecordingReasoner
+    from kintsugi.reasoning.priors import ask_priors
+    from kintsugi.trial import ReasonerSettings
+
+    rec = RecordingReasoner(make_reasoner(ReasonerSettings()))
+    reply, notes = ask_priors(rec, REQUEST)
+    assert reply == embedded_priors(REQUEST) and notes == []
+    assert [r.role for r in rec.records] == ["priors"] and rec.records[0].backend == "embedded"
+
+
+def test_priors_role_over_the_openai_protocol_repairs_then_clamps() -> None:
+    from kintsugi.reasoning.base import RecordingReasoner
+    from kintsugi.reasoning.openai_backend import OpenAIReasoner
+    from kintsugi.reasoning.priors import ask_priors
+    from tests.fake_openai_server import FakeOpenAIServer, content
+
+    with FakeOpenAIServer() as server:
+        server.push(content({"objects": {"cutting board": {"mass_kg": 1.2, "friction": 0.4, "material": "wood"}},
+                             "reasoning": "forgot the box"}),
+                    content({"objects": {"cutting board": {"mass_kg": 1.2, "friction": 0.4, "material": "wood"},
+                                         "cardboard box": {"mass_kg": 900, "friction": 0.5, "material": "lead"}},
+                             "reasoning": "a heavy box"}))
+        model = OpenAIReasoner(model="fake-vlm", base_url=server.base_url, api_key_env="KINTSUGI_TEST_NO_SUCH_KEY")
+        rec = RecordingReasoner(model)
+        reply, notes = ask_priors(rec, REQUEST.model_copy(update={"image_png": b"\x89PNG\r\n\x1a\nfake"}))
+        first, second = server.requests[0], server.requests[1]
+    assert reply.objects["cutting board"].mass_kg == 1.2 and reply.objects["cardboard box"].mass_kg == 50.0
+    assert notes and "cardboard box.mass_kg 900 clamped" in notes[0]
+    assert "physics priors" in json.dumps(first["messages"][1]) and "manipulates objects on a table" in \
+        first["messages"][0]["content"]
+    assert "lacks: cardboard box" in json.dumps(second["messages"])  # the repair round quoted the problem
+    assert rec.records[0].role == "priors" and rec.records[0].attempts == 2

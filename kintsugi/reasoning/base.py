@@ -124,6 +124,10 @@ class RecordingReasoner:
         return sum(1 for r in self.records if r.error is not None)
 
     def _call(self, role: Role, method: Callable[[Any], R], request: BaseModel) -> R:
+        return self.record(role, method, request)
+
+    def record(self, role: str, method: Callable[[Any], R], request: BaseModel) -> R:
+        """Call `method(request)` and append its record under `role` (any role, see reasoning/roles.py)."""
         if hasattr(self.inner, "last_stats"):
             self.inner.last_stats = None  # type: ignore[attr-defined]  # never report a stale call
         start = time.perf_counter()

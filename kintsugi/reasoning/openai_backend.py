@@ -165,14 +165,15 @@ class OpenAIReasoner:
         return self.ask("plan", request, PlanReply, check=check, tools=route)
 
     def ask(self, role: str, request: BaseModel, reply: type[M], *, check: Callable[[M], M] | None = None,
-            tools: ToolRoute | None = None) -> M:
-        """Any role: prompts/<role>.md plus the request (images attached) -> a validated `reply`.
+            tools: ToolRoute | None = None, system: str = "system") -> M:
+        """Any role: prompts/<system>.md as the system message, prompts/<role>.md plus the request (images
+        attached) as the user message -> a validated `reply`.
 
-        A new role needs only its request/reply types and a prompt file; strict
+        A new role needs only its request/reply types and prompt files; strict
         or text output, the repair round and accounting come from `structured`.
         """
         messages: list[dict[str, Any]] = [
-            {"role": "system", "content": load_prompt("system")},
+            {"role": "system", "content": load_prompt(system)},
             {"role": "user", "content": self._user_content(role, request)},
         ]
         return self.structured.ask(role, messages, reply, check=check, tools=tools)

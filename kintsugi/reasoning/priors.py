@@ -115,6 +115,22 @@ def check_priors(reply: PriorsReply, request: PriorsRequest) -> tuple[PriorsRepl
     return PriorsReply(objects=out, reasoning=reply.reasoning), notes
 
 
+def ask_priors(reasoner: Any, request: PriorsRequest) -> tuple[PriorsReply, list[str]]:
+    """The priors role on any backend (embedded table or a model endpoint), checked and clamped; the notes
+    say what was clamped or dropped. Recorded in the transcript when the reasoner records."""
+    from kintsugi.reasoning.roles import ask_role
+
+    notes: list[str] = []
+
+    def check(reply: PriorsReply) -> PriorsReply:
+        checked, found = check_priors(reply, request)
+        notes[:] = found
+        return checked
+
+    reply = ask_role(reasoner, "priors", request, PriorsReply, embedded_priors, check, system="system_contact")
+    return reply, notes
+
+
 def _clamp(value: float, lo: float, hi: float, what: str, notes: list[str]) -> float:
     if lo <= value <= hi:
         return value
@@ -123,4 +139,4 @@ def _clamp(value: float, lo: float, hi: float, what: str, notes: list[str]) -> f
     return clamped
 
 
-__all__ = ["MATERIALS", "Material", "check_priors", "embedded_priors", "material_of", "parse_priors"]
+__all__ = ["MATERIALS", "Material", "ask_priors", "check_priors", "embedded_priors", "material_of", "parse_priors"]

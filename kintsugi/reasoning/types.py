@@ -15,6 +15,7 @@ from pydantic import Field
 from kintsugi.config import StrictModel
 
 Role = Literal["judge", "analyze", "plan"]
+"""The peg recovery's roles; other systems add theirs through `kintsugi.reasoning.roles` (any role name)."""
 RecoverySkill = Literal["approach", "contact", "fit", "align", "insert"]
 """Every skill a plan may name; a request's `skills` says which of them this robot's recovery allows."""
 Axis = Literal["y", "z", "roll"]
@@ -246,7 +247,7 @@ class PlanReply(StrictModel):
 class CallRecord(StrictModel):
     """One reasoner call as kept in the trial transcript."""
 
-    role: Role
+    role: str = Field(min_length=1, max_length=40, description="judge, analyze, plan, or another system's role")
     backend: str
     request: dict
     reply: dict | None
