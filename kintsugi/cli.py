@@ -176,6 +176,9 @@ def bench(
     out: Annotated[Optional[Path], typer.Option(
         help="campaign directory (results.jsonl, report) [default: runs/campaign, or runs/<suite>]")] = None,
     executor: Annotated[str, typer.Option(help="process (default), inline, or ray")] = "process",
+    trial_timeout: Annotated[float, typer.Option(
+        min=0.001, help="seconds a trial may run before its worker is killed and the trial recorded as failed "
+                        "(process executor)")] = 3600.0,
     base_seed: Annotated[int, typer.Option(min=0, help="trial i of every cell uses seed base_seed + i, "
                                                        "so methods meet the same random draws")] = 0,
     videos_per_cell: Annotated[int, typer.Option(min=0, help="record videos of the first N trials per cell")] = 0,
@@ -210,7 +213,7 @@ def bench(
             overrides=(dict(named.overrides) if named else {}) | _overrides(set_), plugins=plugin or [],
             reasoner=_reasoner(reasoner, model, base_url, api_key_env, structured_output),
             videos_per_cell=videos_per_cell)
-        records = run_campaign(cfg, out, workers=workers, executor=executor)
+        records = run_campaign(cfg, out, workers=workers, executor=executor, trial_timeout_s=trial_timeout)
         print_tables(all_tables(records, cfg), console)
         md, html = write_report(out, cfg, records)
     except KintsugiError as exc:

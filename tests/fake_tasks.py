@@ -7,6 +7,7 @@ Variants:
 - "raises": every trial with an even seed raises inside run().
 - "wrong-key": returns a record with another trial's key (a buggy task).
 - "slow": like "fair" but sleeps 50 ms (for kill-and-resume tests).
+- "hangs": the trial with seed 1 sleeps 60 s (for trial-timeout tests); the others take 0.3 s.
 - "crashes": the trial with seed 1 kills its worker with os._exit(1) (only in a
   child process; in the main process it raises instead, so a test never kills pytest).
 Methods: "baseline" has no recovery; "recover" reports extra executions and transitions.
@@ -24,7 +25,8 @@ import numpy as np
 from kintsugi.tasks import TASKS
 from kintsugi.trial import TrialRecord, TrialSpec
 
-P_SUCCESS = {"fair": 0.5, "biased": 0.8, "raises": 0.5, "crashes": 0.5, "wrong-key": 0.5, "slow": 0.5}
+P_SUCCESS = {"fair": 0.5, "biased": 0.8, "raises": 0.5, "crashes": 0.5, "wrong-key": 0.5, "slow": 0.5,
+             "hangs": 0.5}
 SKILLS = ("fit", "align", "insert")
 
 
@@ -60,6 +62,8 @@ class FakeCoinTask:
             _maybe_crash(spec)
         if spec.variant == "slow":
             time.sleep(0.05)
+        if spec.variant == "hangs":
+            time.sleep(60.0 if spec.seed == 1 else 0.3)
         p = P_SUCCESS[spec.variant] + (0.1 if spec.condition == "easy" else 0.0)
         success = bool(rng.random() < p)
         extra: dict[str, int] = {}

@@ -154,6 +154,21 @@ def test_crashed_worker_is_a_failed_trial_and_the_campaign_goes_on(tmp_path):
     assert (out / "results.jsonl").read_bytes() == before
 
 
+def test_hung_trial_is_killed_at_the_timeout_and_the_others_still_run(tmp_path):
+    """Seed 1 sleeps 60 s; with a 2 s timeout it is recorded as timed out, the trial that shared its pool
+    is started again and gets its real result, and the campaign ends in seconds, not a minute."""
+    c = cfg(methods=["baseline"], variants=["hangs"], conditions=["easy"], trials=4)
+    t0 = time.monotonic()
+    records = run_campaign(c, tmp_path / "out", workers=2, executor="process", progress=False, trial_timeout_s=2.0)
+    assert time.monotonic() - t0 < 30
+    assert [r.key for r in records] == [s.key for s in expand(c)]
+    hung = [r for r in records if r.error]
+    assert [r.seed for r in hung] == [1] and "timed out" in hung[0].error and "2 s" in hung[0].error
+    inline = run_campaign(c.model_copy(update={"trials": 1}), tmp_path / "inline", executor="inline", progress=False)
+    assert records[0].without_timings() == inline[0].without_timings()
+    assert all(r.error is None for r in records if r.seed != 1)
+
+
 def test_record_with_wrong_identity_becomes_failure(tmp_path):
     records = run_campaign(cfg(variants=["wrong-key"], conditions=["easy"], methods=["baseline"], trials=2),
                            tmp_path, executor="inline", progress=False)

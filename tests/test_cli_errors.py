@@ -207,6 +207,7 @@ def test_explain_key_accepts_both_forms_and_bad_files_are_one_line_errors(tmp_pa
     (["--videos-per-cell", "-1"], "--videos-per-cell"),
     (["--base-seed", "-1"], "--base-seed"),
     (["--workers", "0"], "--workers"),
+    (["--trial-timeout", "0"], "--trial-timeout"),
     (["--suite", "strech"], "unknown suite 'strech' for task 'peg-insertion'; known: stretch, stretch-paper"),
 ])
 def test_bench_rejects_bad_input_before_the_first_trial(tmp_path: Path, monkeypatch: pytest.MonkeyPatch,

@@ -5,7 +5,9 @@
   that dies (segfault, os._exit) breaks the pool; the trials it held are rerun one
   per fresh single-worker pool, so the one that crashes again is recorded as a
   failed trial and the innocent ones get their real result. The pool is then
-  recreated and the campaign goes on.
+  recreated and the campaign goes on. A trial running longer than the trial
+  timeout is killed with its pool and recorded as failed; the other trials that
+  were running in that pool are started again.
 - `inline`: same process, one after another; for debugging (a crash kills you).
 - `ray`: one ray task per trial, for users with a cluster.
 """
@@ -16,6 +18,7 @@ import importlib
 import multiprocessing
 import os
 import signal
+import time
 from collections import deque
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
@@ -33,7 +36,8 @@ class Executor(Protocol):
         ...
 
 
-ExecutorFactory = Callable[[int, list[str]], Executor]
+ExecutorFactory = Callable[..., Executor]
+"""(workers, plugins, trial_timeout_s=None) -> Executor."""
 EXECUTORS: Registry[ExecutorFactory] = Registry("executor")
 
 
@@ -88,11 +92,15 @@ _CRASH = (
 )
 CRASH_ONLY = _CRASH.format(how="; it was the only trial in its worker pool")
 CRASH_ALONE = _CRASH.format(how="; it crashed again when rerun alone")
+TIMED_OUT = ("trial timed out: still running after {limit:g} s (the campaign's trial timeout, --trial-timeout); "
+             "its worker was killed. Rerun it alone with `kintsugi run` to see where it hangs.")
 
 
 @EXECUTORS.register("inline", "run trials one by one in this process (debugging; a crash ends the campaign)")
 class InlineExecutor:
-    def __init__(self, workers: int, plugins: list[str]) -> None:
+    """No trial timeout: nothing can stop a trial running in this very process."""
+
+    def __init__(self, workers: int, plugins: list[str], trial_timeout_s: float | None = None) -> None:
         self.plugins = list(plugins)
 
     def run(self, specs: Iterable[TrialSpec]) -> Iterator[tuple[TrialSpec, TrialRecord]]:
@@ -102,9 +110,12 @@ class InlineExecutor:
 
 @EXECUTORS.register("process", "spawn-started process pool on this machine (default)", tags=("default",))
 class ProcessExecutor:
-    def __init__(self, workers: int, plugins: list[str]) -> None:
+    def __init__(self, workers: int, plugins: list[str], trial_timeout_s: float | None = None) -> None:
         if workers < 1:
             raise KintsugiError(f"workers must be >= 1, got {workers}")
+        if trial_timeout_s is not None and not trial_timeout_s > 0:
+            raise KintsugiError(f"the trial timeout must be > 0 seconds, got {trial_timeout_s}")
+        self.timeout = trial_timeout_s
         self.workers = workers
         self.plugins = list(plugins)
         self._ctx = multiprocessing.get_context("spawn")
@@ -144,6 +155,8 @@ class ProcessExecutor:
         in_flight: dict[Future, TrialSpec] = {}
         # Suspects of a crash, each alone in its own one-worker pool.
         isolated: dict[Future, tuple[TrialSpec, ProcessPoolExecutor]] = {}
+        # When each running trial started (a pool never holds more trials than workers, so submitted = started).
+        started: dict[Future, float] = {}
         try:
             while queue or in_flight or isolated:
                 while queue and len(in_flight) < size:
@@ -158,9 +171,32 @@ class ProcessExecutor:
                             continue
                         break
                     in_flight[fut] = queue.popleft()
-                done, _ = wait([*in_flight, *isolated], return_when=FIRST_COMPLETED)
+                    started[fut] = time.monotonic()
+                done, _ = wait([*in_flight, *isolated], return_when=FIRST_COMPLETED, timeout=self._wait_s(started))
+                if not done:  # a trial ran past the timeout: kill its pool, record it, restart the innocent
+                    expired = self._expired(started)
+                    for fut in expired:
+                        started.pop(fut)
+                        if fut in isolated:
+                            spec, solo = isolated.pop(fut)
+                            _kill(solo)
+                            yield spec, failed_record(spec, TIMED_OUT.format(limit=self.timeout))
+                    hung = [f for f in expired if f in in_flight]
+                    if hung:
+                        queue.extendleft(reversed([sp for f, sp in in_flight.items() if f not in hung]))
+                        for f in in_flight:
+                            started.pop(f, None)
+                        timed_out = [in_flight[f] for f in hung]
+                        in_flight.clear()
+                        _kill(pool)
+                        size = max(1, min(self.workers, len(queue)))
+                        pool = self._pool(size)
+                        for spec in timed_out:
+                            yield spec, failed_record(spec, TIMED_OUT.format(limit=self.timeout))
+                    continue
                 suspects: list[TrialSpec] = []
                 for fut in done:
+                    started.pop(fut, None)
                     if fut in isolated:
                         spec, solo = isolated.pop(fut)
                         solo.shutdown(wait=False, cancel_futures=True)
@@ -176,12 +212,16 @@ class ProcessExecutor:
                 # The pool is broken: every trial still in it fails too. One suspect is
                 # the culprit; several are each rerun alone to find which one crashes.
                 suspects.extend(in_flight.values())
+                for f in in_flight:
+                    started.pop(f, None)
                 in_flight.clear()
                 pool.shutdown(wait=False, cancel_futures=True)
                 if len(suspects) > 1:
                     for spec in suspects:
                         solo = self._pool(1)
-                        isolated[solo.submit(run_in_worker, spec, self.plugins)] = (spec, solo)
+                        fut = solo.submit(run_in_worker, spec, self.plugins)
+                        isolated[fut] = (spec, solo)
+                        started[fut] = time.monotonic()
                 size = max(1, min(self.workers, len(queue)))
                 pool = self._pool(size)  # starts while the suspects rerun
                 if len(suspects) == 1:
@@ -193,6 +233,16 @@ class ProcessExecutor:
                 _kill(p)
             raise
         pool.shutdown(wait=True)
+
+    def _wait_s(self, started: dict[Future, float]) -> float | None:
+        """Seconds until the oldest running trial reaches the timeout (None: no timeout)."""
+        if self.timeout is None or not started:
+            return None
+        return max(0.0, min(started.values()) + self.timeout - time.monotonic())
+
+    def _expired(self, started: dict[Future, float]) -> list[Future]:
+        now = time.monotonic()
+        return [f for f, t in started.items() if self.timeout is not None and now - t >= self.timeout]
 
     @staticmethod
     def _outcome(fut: Future, spec: TrialSpec, crashed: str) -> TrialRecord:
@@ -207,7 +257,9 @@ class ProcessExecutor:
 
 @EXECUTORS.register("ray", "one Ray task per trial (local or cluster; pip install 'kintsugi[ray]')")
 class RayExecutor:
-    def __init__(self, workers: int, plugins: list[str]) -> None:
+    """Trial timeout: not enforced (Ray's own task timeouts apply)."""
+
+    def __init__(self, workers: int, plugins: list[str], trial_timeout_s: float | None = None) -> None:
         try:
             import ray
         except ImportError:
@@ -246,6 +298,6 @@ class RayExecutor:
                 ray.cancel(ref, force=True)
 
 
-def make_executor(name: str, workers: int, plugins: list[str]) -> Executor:
+def make_executor(name: str, workers: int, plugins: list[str], trial_timeout_s: float | None = None) -> Executor:
     """Build an executor by registry name (unknown names list the known ones)."""
-    return EXECUTORS.get(name).factory(workers, plugins)
+    return EXECUTORS.get(name).factory(workers, plugins, trial_timeout_s=trial_timeout_s)

@@ -46,6 +46,7 @@ def run_campaign(
     executor: str = "process",
     progress: bool = True,
     console: Console | None = None,
+    trial_timeout_s: float | None = None,
 ) -> list[TrialRecord]:
     """Run (or resume) a campaign into `out_dir`; return the records of all its trials, in config order.
 
@@ -55,7 +56,7 @@ def run_campaign(
     """
     out = Path(out_dir)
     validate(cfg)  # fail fast here rather than once per trial in workers
-    runner = make_executor(executor, workers, cfg.plugins)
+    runner = make_executor(executor, workers, cfg.plugins, trial_timeout_s=trial_timeout_s)
     store = ResultStore(out)
     store.ensure_manifest(cfg)
     specs = expand(cfg, video_dir=out / "videos")
