@@ -54,9 +54,20 @@ def _step_tabletop_world(task: str, variant: str, condition: str, seed: int) -> 
     return world.model, world.data
 
 
+def _step_contact_world(task: str, variant: str, condition: str, seed: int) -> tuple[mujoco.MjModel, mujoco.MjData]:
+    """Build a contact task's evaluation world and drive it with its reference method (MPPI, contacts)."""
+    from kintsugi.tasks.contact.task import run_reference
+
+    world = run_reference(TASKS.get(task).factory(), condition, seed)
+    world.close()
+    assert world.steps > 1000
+    return world.model, world.data
+
+
 WORLD_STEPPERS: dict[str, Callable[[str, str, int], tuple[mujoco.MjModel, mujoco.MjData]]] = {
     "peg-insertion": _step_peg_world,
-} | {e.name: functools.partial(_step_tabletop_world, e.name) for e in BUILTIN if "tabletop" in e.tags}
+} | {e.name: functools.partial(_step_tabletop_world, e.name) for e in BUILTIN if "tabletop" in e.tags
+     } | {e.name: functools.partial(_step_contact_world, e.name) for e in BUILTIN if "contact" in e.tags}
 """How to build and step each task's world directly, to read MuJoCo's warning counters."""
 
 

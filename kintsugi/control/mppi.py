@@ -57,6 +57,7 @@ class IterationStats:
     ess: float = 0.0  # effective sample size (a count)
     n_valid: int = 0
     best_qpos: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))  # (T, nq) lowest-cost rollout
+    best_index: int = -1  # its sample index in `MPPI.last_batch` (-1: none valid)
     rollout_s: float = 0.0  # physics: RolloutEngine.run, summed over iterations
     total_s: float = 0.0  # the whole step
 
@@ -87,6 +88,7 @@ class MPPI:
         self._sigma = cfg.noise_frac * ramp[:, None] * width[None, :]  # (knots, nu)
         self.last = IterationStats()
         self.last_batch: RolloutBatch | None = None
+        self._pinned: dict[int, float] = {}
         self.reset()
 
     # -- public -------------------------------------------------------------------------
@@ -99,6 +101,22 @@ class MPPI:
     def set_cost(self, cost: CostFn) -> None:
         """Swap the cost (a new stage, a rewritten cost); the plan stays as a warm start."""
         self.cost = cost
+
+    def pin(self, actuator: int, value: float | None) -> None:
+        """Hold one actuator's command at `value` in every sample and in the plan (None: plan it again).
+
+        A staged cost that decides the gripper itself (open to reach, closed to lift) pins it,
+        so no sample wastes its noise on a command that will not be sent.
+        """
+        if not 0 <= actuator < self.model.nu:
+            raise ConfigError(f"actuator index {actuator} out of range (the model has {self.model.nu})")
+        if value is None:
+            self._pinned.pop(actuator, None)
+            return
+        lo, hi = self.ctrlrange[actuator]
+        self._pinned[actuator] = float(np.clip(value, lo, hi))
+        if self.nominal is not None:
+            self.nominal[:, actuator] = self._pinned[actuator]
 
     def close(self) -> None:
         self.engine.close()
@@ -134,12 +152,16 @@ class MPPI:
         else:  # time-shift: the old spline evaluated at the new knot times
             old_t = self.nominal_t0 + self.knot_offsets
             self.nominal = spline.evaluate(self.cfg.interp, old_t, self.nominal, t + self.knot_offsets)
+        for i, v in self._pinned.items():
+            self.nominal[:, i] = v
         self.nominal_t0 = t
 
     def _iterate(self, data: mujoco.MjData, stats: IterationStats) -> None:
         K = self.cfg.samples
         noise = self._rng.standard_normal((K, *self.nominal.shape)) * self._sigma
         noise[0] = 0.0  # sample 0 is the warm-started plan itself
+        for i in self._pinned:
+            noise[:, :, i] = 0.0
         knots = np.clip(self.nominal + noise, self.ctrlrange[:, 0], self.ctrlrange[:, 1])
         controls = self.controls_for(knots)
         t0 = time.perf_counter()
@@ -159,6 +181,7 @@ class MPPI:
         stats.cost_min = float(costs[best])
         stats.cost_mean = float(costs[finite].mean())
         stats.best_qpos = batch.qpos[best].copy()
+        stats.best_index = best
 
     def _costs(self, batch: RolloutBatch) -> np.ndarray:
         with np.errstate(all="ignore"):  # invalid rollouts may hold NaN; they are masked below

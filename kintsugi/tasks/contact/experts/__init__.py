@@ -1,0 +1,26 @@
+"""Hand-written expert costs per contact task: a single-stage cost and a staged FSM.
+
+Each entry maps a task name to (single, fsm): functions of a `ContactContext` returning
+the stage factories the planner runs. Both read only what any method may read.
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+from kintsugi.errors import ConfigError
+from kintsugi.tasks.contact.context import ContactContext
+from kintsugi.tasks.contact.experts import picking
+from kintsugi.tasks.contact.fsm import StageFactory
+
+Design = Callable[[ContactContext], list[StageFactory]]
+
+EXPERTS: dict[str, tuple[Design, Design]] = {
+    "pick-box": (picking.pick_box_single, picking.pick_box_fsm),
+}
+
+
+def expert_design(task: str, staged: bool) -> Design:
+    if task not in EXPERTS:
+        raise ConfigError(f"no expert cost for task {task!r}; experts exist for: {', '.join(EXPERTS)}")
+    return EXPERTS[task][1 if staged else 0]
