@@ -82,12 +82,13 @@ class ObjectsSection(StrictModel):
     bottle: ObjectSection = _obj((0.03, 0.10, 0.0), 0.40, 0.8, (0.15, 0.45, 0.9, 1), (0.35, 0.43), (-0.30, -0.22))
     cup: ObjectSection = _obj((0.045, 0.045, 0.005), 0.15, 0.8, (0.9, 0.75, 0.2, 1), (0.42, 0.50), (-0.06, 0.04))
     """Hollow: (outer radius, half-height, wall thickness)."""
-    plate: ObjectSection = _obj((0.10, 0.008, 0.0), 0.30, 0.6, (0.92, 0.92, 0.88, 1), (0.42, 0.48), (-0.03, 0.03))
-    fork: ObjectSection = _obj((0.09, 0.009, 0.006), 0.05, 0.8, (0.7, 0.7, 0.75, 1), (0.35, 0.45), (0.15, 0.22),
-                               (80.0, 100.0))
-    """Handle half-length, handle half-width, half-thickness (the head is wider)."""
-    spoon: ObjectSection = _obj((0.09, 0.009, 0.006), 0.05, 0.8, (0.75, 0.7, 0.7, 1), (0.35, 0.45), (-0.22, -0.15),
-                                (80.0, 100.0))
+    plate: ObjectSection = _obj((0.10, 0.008, 0.0), 0.30, 0.6, (0.92, 0.92, 0.88, 1), (0.50, 0.56), (-0.03, 0.03))
+    fork: ObjectSection = _obj((0.09, 0.009, 0.006), 0.05, 0.8, (0.7, 0.7, 0.75, 1), (0.26, 0.34), (0.22, 0.28),
+                               (75.0, 105.0))
+    """Handle half-length, handle half-width, half-thickness (the head is wider). At yaw 0 the head points +x."""
+    spoon: ObjectSection = _obj((0.09, 0.009, 0.006), 0.05, 0.8, (0.75, 0.7, 0.7, 1), (0.26, 0.34), (-0.28, -0.22),
+                                (-105.0, -75.0))
+    """Mirrors the fork: its head points outwards (-y), so the right arm turns it as the left turns the fork."""
     block: ObjectSection = _obj((0.025, 0.025, 0.025), 0.10, 0.8, (0.85, 0.2, 0.2, 1), (0.35, 0.45), (0.15, 0.25),
                                 (-20.0, 20.0))
     capsule: ObjectSection = _obj((0.018, 0.015, 0.0), 0.015, 0.8, (0.55, 0.3, 0.1, 1), (0.35, 0.42), (0.18, 0.25))
@@ -95,11 +96,26 @@ class ObjectsSection(StrictModel):
     """Base half-extents x, y and rim height."""
 
 
+OBJECT_KINDS = tuple(ObjectsSection.model_fields)
+
+
 class Region(StrictModel):
-    """A target region painted on the table (visual only): centre and half-extents."""
+    """A target region painted on the table (visual only): centre and half-extents (x, y).
+
+    With `relative_to` the centre is an offset from that object's centre and the region moves
+    with it ("beside the plate"); else it is fixed on the table."""
 
     center_m: tuple[float, float]
-    half_m: tuple[float, float] = (0.04, 0.04)
+    half_m: tuple[float, float] = Field((0.04, 0.04), description="half-extents along x and y")
+    relative_to: str | None = None
+
+    @model_validator(mode="after")
+    def _positive(self) -> Region:
+        if min(self.half_m) <= 0:
+            raise ValueError(f"half_m {self.half_m} must be positive")
+        if self.relative_to is not None and self.relative_to not in OBJECT_KINDS:
+            raise ValueError(f"relative_to {self.relative_to!r} is not an object; known: {', '.join(OBJECT_KINDS)}")
+        return self
 
 
 class TableSection(StrictModel):
@@ -175,6 +191,8 @@ class ScoringSection(StrictModel):
     pour_tilt_deg: float = Field(80.0, gt=0, le=180)
     """The designated pouring orientation: the bottle's axis at least this far from vertical."""
     upright_tol_deg: float = Field(10.0, gt=0)
+    align_tol_deg: float = Field(15.0, gt=0, le=180)
+    """A placed utensil's head may point this far from its required direction."""
     rest_speed_m_s: float = Field(0.02, gt=0)
 
 
@@ -182,11 +200,12 @@ class TabletopConfig(StrictModel):
     robot: RobotSection = RobotSection()
     objects: ObjectsSection = ObjectsSection()
     targets: dict[str, Region] = {
-        "fork": Region(center_m=(0.45, 0.16), half_m=(0.03, 0.1)),
-        "spoon": Region(center_m=(0.45, -0.16), half_m=(0.03, 0.1)),
-        "block": Region(center_m=(0.40, -0.25)),
-        "tray_forward": Region(center_m=(0.55, 0.0), half_m=(0.12, 0.09)),
+        "fork": Region(center_m=(0.0, 0.18), half_m=(0.04, 0.025), relative_to="plate"),
+        "spoon": Region(center_m=(0.0, -0.18), half_m=(0.04, 0.025), relative_to="plate"),
+        "block": Region(center_m=(0.40, -0.25), half_m=(0.035, 0.035)),
+        "tray_forward": Region(center_m=(0.56, 0.0), half_m=(0.03, 0.03)),
     }
+    """Where things must end up; a region constrains the object's centre (e.g. the tray's centre)."""
     table: TableSection = TableSection()
     sim: SimSection = SimSection()
     motion: MotionSection = MotionSection()
@@ -196,5 +215,4 @@ class TabletopConfig(StrictModel):
     scoring: ScoringSection = ScoringSection()
 
 
-OBJECT_KINDS = tuple(ObjectsSection.model_fields)
 ARMS = ("left", "right")

@@ -121,8 +121,9 @@ def _geoms(kind: str, o: ObjectSection) -> list[str]:
     return [f'<geom name="{kind}_body" type="box" size="{f(*s)}" mass="{m:.6g}" {common}/>']
 
 
-def object_xml(kind: str, objects: ObjectsSection) -> str:
-    """A free body resting upright at the origin of the table; the world sets its start pose."""
+def object_xml(kind: str, objects: ObjectsSection, extra: str = "") -> str:
+    """A free body resting upright at the origin of the table; the world sets its start pose.
+    `extra`: more geoms riding with it (regions painted beside it)."""
     o = getattr(objects, kind)
     shape = shape_of(kind, objects)
     sites = ""
@@ -134,4 +135,5 @@ def object_xml(kind: str, objects: ObjectsSection) -> str:
       <freejoint name="{kind}"/>
       {geoms}
       {sites}
+      {extra}
     </body>"""

@@ -24,7 +24,7 @@ from kintsugi.tasks.tabletop.arm_model import (
     f,
 )
 from kintsugi.tasks.tabletop.config import ARMS, TabletopConfig
-from kintsugi.tasks.tabletop.objects import object_xml
+from kintsugi.tasks.tabletop.objects import object_xml, shape_of
 
 TABLE_THICK = 0.04
 REGION_RGBA = "0.2 0.8 0.3 0.45"
@@ -48,12 +48,17 @@ def _cameras(cfg: TabletopConfig) -> str:
             f'<camera name="front" pos="{f(*c.front_pos_m)}" xyaxes="{f(*x, *y)}" fovy="{c.front_fovy_deg:.6g}"/>')
 
 
-def _regions(cfg: TabletopConfig, names: Sequence[str]) -> str:
+def _regions(cfg: TabletopConfig, names: Sequence[str], relative_to: str | None = None, z: float = 0.0) -> str:
+    """Painted regions fixed on the table, or (`relative_to`) riding in that object's body at
+    height `z` below its origin. Their geoms are named `target_<name>` (perception skips them)."""
     out = []
     for name in names:
         r = cfg.targets[name]
+        if r.relative_to != relative_to:
+            continue
         out.append(f'<geom name="target_{name}" type="box" size="{f(*r.half_m, 0.0005)}" '
-                   f'pos="{f(*r.center_m, 0.0006)}" rgba="{REGION_RGBA}" contype="0" conaffinity="0"/>')
+                   f'pos="{f(*r.center_m, 0.0006 - z)}" rgba="{REGION_RGBA}" contype="0" conaffinity="0" '
+                   f'density="0"/>')
     return "\n    ".join(out)
 
 
@@ -64,7 +69,8 @@ def build_scene_xml(cfg: TabletopConfig, objects: Sequence[str], targets: Sequen
     actuators = "\n    ".join(arm_actuators_xml(r, arm) for arm in ARMS)
     tendons = "\n    ".join(arm_tendon_xml(arm) for arm in ARMS)
     equalities = "\n    ".join(arm_equality_xml(arm) for arm in ARMS)
-    bodies = "".join(object_xml(kind, cfg.objects) for kind in objects)
+    bodies = "".join(object_xml(kind, cfg.objects, _regions(cfg, targets, kind, shape_of(kind, cfg.objects).rest_height))
+                     for kind in objects)
     return f"""
 <mujoco model="tabletop">
   <compiler angle="radian" autolimits="true"/>

@@ -64,3 +64,23 @@ def held(truth: GroundTruth, obj: str) -> bool:
 
 def tilt_deg(axis: np.ndarray) -> float:
     return math.degrees(math.acos(float(np.clip(axis[2], -1.0, 1.0))))
+
+
+def region_center(cfg: TabletopConfig, name: str, truth: GroundTruth) -> np.ndarray:
+    """A target region's centre now (a region beside an object moves with it)."""
+    r = cfg.targets[name]
+    c = np.array(r.center_m, float)
+    if r.relative_to is not None:
+        c = c + np.array(truth.objects[r.relative_to].pos[:2])
+    return c
+
+
+def in_region(cfg: TabletopConfig, name: str, truth: GroundTruth, obj: str) -> bool:
+    """The object's centre lies inside the region (its half-extents along world x and y)."""
+    d = np.abs(np.array(truth.objects[obj].pos[:2]) - region_center(cfg, name, truth))
+    return bool(np.all(d <= np.array(cfg.targets[name].half_m)))
+
+
+def rest_level(truth: GroundTruth, obj: str, rest_height: float, tol_deg: float, tol_m: float = 0.005) -> bool:
+    """Lying the right way up on the table: the body's z axis up and its centre at its rest height."""
+    return upright(truth, obj, tol_deg) and on_table(truth, obj, rest_height, tol_m)

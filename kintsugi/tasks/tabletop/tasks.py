@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+from kintsugi.tasks.tabletop.pour_dual import SPEC as POUR_DUAL
 from kintsugi.tasks.tabletop.pour_single import SPEC as POUR_SINGLE
+from kintsugi.tasks.tabletop.rearrange_table import SPEC as REARRANGE
 from kintsugi.tasks.tabletop.task import register
 
-SPECS = (POUR_SINGLE,)
+SPECS = (POUR_SINGLE, POUR_DUAL, REARRANGE)
 for _spec in SPECS:
     register(_spec)

@@ -120,6 +120,9 @@ class TabletopWorld:
         """Per geom: index into `self.objects`, or -1 (robot, table, regions)."""
         for i, k in enumerate(self.objects):
             self.geom_object[m.geom_bodyid == self.bodies[k]] = i
+        for g in range(m.ngeom):  # regions painted beside an object are not part of it
+            if (mujoco.mj_id2name(m, o.mjOBJ_GEOM, g) or "").startswith("target_"):
+                self.geom_object[g] = -1
         self.cameras = {c: resolve(m, o.mjOBJ_CAMERA, c) for c in CAMERAS}
         self.table_geom = resolve(m, o.mjOBJ_GEOM, "table")
         self.data = mujoco.MjData(m)
