@@ -2,11 +2,12 @@
 
 from __future__ import annotations
 
+from kintsugi.tasks.tabletop.handover_block import SPEC as HANDOVER
 from kintsugi.tasks.tabletop.pour_dual import SPEC as POUR_DUAL
 from kintsugi.tasks.tabletop.pour_single import SPEC as POUR_SINGLE
 from kintsugi.tasks.tabletop.rearrange_table import SPEC as REARRANGE
 from kintsugi.tasks.tabletop.task import register
 
-SPECS = (POUR_SINGLE, POUR_DUAL, REARRANGE)
+SPECS = (POUR_SINGLE, POUR_DUAL, REARRANGE, HANDOVER)
 for _spec in SPECS:
     register(_spec)

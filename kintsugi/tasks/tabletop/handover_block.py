@@ -1,0 +1,119 @@
+"""Task `handover-block`: the left arm picks the block up and hands it to the right arm, which
+places it in the target region (paper, appendix B).
+
+Success (all at the end unless said): the block was held by both grippers at once at some
+instant (the handover), then by the right alone; it was never dropped (free of both grippers
+while off the table between the pick-up and the final release); it rests flat on the table,
+its centre inside `targets.block`, at rest and released.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+from kintsugi.config import StrictModel
+from kintsugi.tasks.tabletop.config import TabletopConfig
+from kintsugi.tasks.tabletop.objects import shape_of
+from kintsugi.tasks.tabletop.spec import TaskSpec, at_rest, held, in_region, region_center
+from kintsugi.tasks.tabletop.world import GroundTruth, TabletopWorld
+
+HANDOVER_XYZ = (0.42, 0.0, 0.20)
+"""Where the left arm presents the block (its grasp point, gripper pointing down, fingers closing along y)."""
+DOWN_CLOSING_Y = (0.0, 180.0, 0.0)
+SIDE_FROM_RIGHT = (-90.0, 90.0, 0.0)
+"""The right gripper horizontal, approaching along +y, fingers closing along x (across the free faces)."""
+TAKE_DEPTH_M = 0.01
+"""The right grasp point stops this short of the block's centre, keeping its palm off the left fingers."""
+TAKE_HIGH_M = 0.012
+"""...and this far above it, so that its palm (lower edge 3 cm below the grasp point) clears the table at the place."""
+REGION = (0.40, -0.25)
+DROP_TICKS = 5
+"""Touching neither gripper, off the table, for this many control ticks in a row is a drop
+(a single tick without a pad contact is the contact solver flickering, not a fall)."""
+
+
+def script(obs: Any) -> list[dict[str, Any]]:
+    return [
+        {"action": "grasp", "arm": "left", "obj": "block", "pre_grasp_offset": 0.06},
+        {"action": "move_by_offset", "arm": "left", "dxyz": (0.0, 0.0, 0.12)},
+        {"action": "move_to_target", "arm": "left", "xyz": HANDOVER_XYZ, "rpy_deg": DOWN_CLOSING_Y},
+        {"action": "move_to_obj", "arm": "right", "obj": "block", "offset": (0.0, -0.10, TAKE_HIGH_M),
+         "rpy_deg": SIDE_FROM_RIGHT},
+        {"action": "move_by_offset", "arm": "right", "dxyz": (0.0, 0.10 - TAKE_DEPTH_M, 0.0)},
+        {"action": "close_gripper", "arm": "right"},
+        {"action": "open_gripper", "arm": "left"},
+        {"action": "move_by_offset", "arm": "left", "dxyz": (0.0, 0.0, 0.08)},
+        {"action": "place", "arm": "right", "x": REGION[0], "y": REGION[1]},
+        {"action": "drive", "left": {"action": "back", "arm": "left"}, "right": {"action": "back", "arm": "right"}},
+    ]
+
+
+class HandoverDetails(StrictModel):
+    picked: bool
+    """The left gripper held the block off the table."""
+    handed_over: bool
+    """Both grippers held it at once, and later the right alone."""
+    dropped: bool
+    flat: bool
+    in_region: bool
+    offset_m: tuple[float, float]
+    at_rest: bool
+    released: bool
+
+
+def _flat(truth: GroundTruth, obj: str, rest_h: float, tol_deg: float) -> bool:
+    """A cube rests flat on any face: one body axis vertical, its centre at half the side."""
+    q = truth.objects[obj].quat
+    m = Rotation.from_quat([q[1], q[2], q[3], q[0]]).as_matrix()
+    return bool(np.max(np.abs(m[2, :])) >= np.cos(np.radians(tol_deg))
+                and abs(truth.objects[obj].pos[2] - rest_h) <= 0.005)
+
+
+class HandoverScorer:
+    def __init__(self, cfg: TabletopConfig) -> None:
+        self.cfg = cfg
+        self.rest_h = shape_of("block", cfg.objects).rest_height
+        self.picked = self.both = self.right_alone = self.dropped = False
+        self._free_ticks = 0
+
+    def watch(self, world: TabletopWorld) -> None:
+        left, right = world.pad_contacts("left")[0], world.pad_contacts("right")[0]
+        by_left, by_right = left.get("block") == 2, right.get("block") == 2
+        z = float(world.data.xpos[world.bodies["block"]][2])
+        off_table = z > self.rest_h + 0.01
+        self.picked |= by_left and off_table
+        self.both |= by_left and by_right
+        self.right_alone |= self.both and by_right and "block" not in left
+        free = "block" not in left and "block" not in right
+        self._free_ticks = self._free_ticks + 1 if (self.picked and off_table and free) else 0
+        self.dropped |= self._free_ticks >= DROP_TICKS
+
+    def finish(self, world: TabletopWorld) -> tuple[bool, HandoverDetails]:
+        truth = world.ground_truth()
+        sc = self.cfg.scoring
+        d = HandoverDetails(
+            picked=self.picked, handed_over=self.both and self.right_alone, dropped=self.dropped,
+            flat=_flat(truth, "block", self.rest_h, sc.upright_tol_deg),
+            in_region=in_region(self.cfg, "block", truth, "block"),
+            offset_m=tuple(round(float(v), 4) for v in np.array(truth.objects["block"].pos[:2])
+                           - region_center(self.cfg, "block", truth)),
+            at_rest=at_rest(truth, "block", sc.rest_speed_m_s), released=not held(truth, "block"))
+        ok = d.picked and d.handed_over and not d.dropped and d.flat and d.in_region and d.at_rest and d.released
+        return bool(ok), d
+
+
+SPEC = TaskSpec(
+    name="handover-block",
+    description="handover block: the left arm hands the block to the right, which places it in the region (system B)",
+    objects=("block",),
+    instruction="Pick up the block with the left arm, hand it over to the right arm, and place it in the "
+                "green target region with the right arm without dropping it.",
+    goal=("handed_over(block, left, right)", "not dropped(block)", "in_region(block, target)", "flat(block)",
+          "released(block)"),
+    script=script,
+    scorer=HandoverScorer,
+    targets=("block",),
+)
