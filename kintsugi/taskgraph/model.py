@@ -211,6 +211,8 @@ def _locate(data: Any, loc: tuple) -> str:
         if isinstance(key, int):
             item = node[key] if isinstance(node, list) and 0 <= key < len(node) else None
             ident = item.get("id") if isinstance(item, dict) else None
+            if isinstance(ident, str) and len(ident) > 40:  # a hostile id must not flood the message
+                ident = ident[:37] + "..."
             parts.append(f"[{key}]" + (f" {ident!r}" if isinstance(ident, str) else ""))
             node = item
         else:

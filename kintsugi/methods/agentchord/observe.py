@@ -1,0 +1,42 @@
+"""The robot's observation in the two shapes system B's reasoning and monitors read: the roles' typed
+`SeenObject`/`SeenArm` (perceived features and the arms' own sensors, never truth) and the monitors'
+`Features` vector (Eq. 1)."""
+
+from __future__ import annotations
+
+from typing import Any, Iterable
+
+from kintsugi.reasoning.taskgraph_types import SeenArm, SeenObject
+from kintsugi.taskgraph.features import ArmState, Features
+
+ARMS = ("left", "right")
+
+
+def seen_objects(objects: dict[str, Any]) -> list[SeenObject]:
+    out = []
+    for name, f in objects.items():
+        ex = f.extremes or {}
+        out.append(SeenObject(
+            name=name, visible=bool(f.visible), centroid=f.centroid,
+            top_z=ex["top"][2] if "top" in ex else None, bottom_z=ex["bottom"][2] if "bottom" in ex else None,
+            tilt_deg=f.tilt_deg, upright=f.upright, extent=f.extent))
+    return out
+
+
+def seen_arms(arms: dict[str, Any]) -> list[SeenArm]:
+    return [SeenArm(name=name, tcp_pos=a.tcp_pos, gripper_opening_m=a.gripper_opening_m,
+                    gripper_closed=a.gripper_closed, holding=sorted(k for k, n in a.touching.items() if n == 2))
+            for name, a in arms.items()]
+
+
+def arm_features(arm: Any) -> ArmState:
+    """One arm's proprioception as the monitors read it: tool position, opening, commanded state, contacts."""
+    return ArmState(eef=arm.tcp_pos, opening=float(arm.gripper_opening_m), closed=bool(arm.gripper_closed),
+                    touching=frozenset(k for k, n in arm.touching.items() if n >= 1))
+
+
+def features(robot: Any, objects: Iterable[str] | None = None, cached: dict[str, Any] | None = None) -> Features:
+    """The feature vector now: objects perceived (or `cached` when perception is not re-run this step)."""
+    objs = cached if cached is not None else robot.features(objects)
+    visible = {k: f for k, f in objs.items() if f.visible and f.centroid is not None}
+    return Features(objects=visible, arms={a: arm_features(robot.arm_state(a)) for a in ARMS})

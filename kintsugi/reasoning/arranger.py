@@ -1,0 +1,208 @@
+"""The arranger role (AgentChord Eq. 4-8): a nominal graph -> monitors and forward-moving recovery branches.
+
+`embedded_arrange` uses a failure-mode knowledge base keyed by atomic action type (`FAILURES`): for each
+nominal edge, each mode that fits it gives a monitor (a constraint template over the features, > 0 =
+violated, with margin and persistence window) and a predicted symbolic state after the failure. From that
+state the symbolic planner finds the cheapest way back to the edge's own target node (the merge node), and
+that plan becomes the recovery branch: recovery nodes for its intermediate sub-goals, recovery edges for its
+steps. A mode with no plan back is left out (and said so in the reply's reasoning). `check_arrangement`
+inserts any backend's proposals (`taskgraph.augment`) and applies Eq. 8 (`taskgraph.forward_filter`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+from kintsugi.reasoning.composer import arms_named, node_constraints
+from kintsugi.reasoning.jsontext import BadReply
+from kintsugi.reasoning.symbolic import PlanningError, State, ground, parse_literals, plan
+from kintsugi.reasoning.taskgraph_types import ArrangerReply, ArrangerRequest, SeenObject
+from kintsugi.taskgraph.augment import augment, parse_proposals
+from kintsugi.taskgraph.base import GraphError
+from kintsugi.taskgraph.forward import FilterResult, forward_filter
+from kintsugi.taskgraph.model import TaskGraph
+
+CARRY_ACTIONS = frozenset({"move_by_offset", "move_to_obj", "move_to_target", "rotate_eef", "place"})
+"""Atomic actions during which a held object can be dropped or slip."""
+EMPTY_GRIP_M = 0.01
+"""Fingers closed to less than this have nothing between them (every graspable object is wider)."""
+SLIP_TOL_M = 0.08
+"""A held object's centroid farther than this from the grasp point has slipped in the hand."""
+MOVED_TOL_M = 0.03
+TOPPLE_TOL_DEG = 30.0
+
+
+@dataclass(frozen=True)
+class FailureMode:
+    """One entry of the knowledge base: when it applies, its monitor, and what it leaves behind."""
+
+    name: str
+    actions: frozenset[str]
+    """Atomic action types it can happen during."""
+    needs: str
+    """`held`: an object held in the edge's source state; `target`: the object an action reaches for."""
+    check: Callable[[str, str], dict]
+    margin: float
+    window: int
+    after: Callable[[State, str, str], State]
+    """Predicted symbolic state after the failure, from the failure context's state."""
+    why: str
+
+
+def _drop(s: State, arm: str, obj: str) -> State:
+    """The object fell: the hand is empty (the gripper closes on nothing), the object lies on the table,
+    nothing about it being lifted, over or tilted holds; we assume it landed upright (if it toppled, the
+    `toppled` monitor of the next grasp sees it)."""
+    keep = {a for a in s if not (a[0] in ("holding",) and a[1] == arm)
+            and not (a[0] in ("lifted", "over", "tilted") and a[1] == obj)}
+    return frozenset(keep | {("hand_empty", arm), ("on_table", obj), ("released", obj), ("upright", obj)})
+
+
+def _unchanged(s: State, arm: str, obj: str) -> State:
+    return s
+
+
+def _toppled(s: State, arm: str, obj: str) -> State:
+    return frozenset(a for a in s if a != ("upright", obj))
+
+
+FAILURES: tuple[FailureMode, ...] = (
+    FailureMode("missed_grasp", frozenset({"grasp"}), "target",
+                lambda arm, obj: {"kind": "not_grasped", "arm": arm, "min_opening": EMPTY_GRIP_M}, 0.0, 3, _unchanged,
+                "the fingers closed on nothing (opening below any object's width): open and grasp again"),
+    FailureMode("object_moved", frozenset({"grasp"}), "target",
+                lambda arm, obj: {"kind": "drift", "point": {"entity": obj}, "tol": MOVED_TOL_M, "axes": "xy"},
+                0.0, 3, _unchanged,
+                "the object slid away from where it was seen at the edge start: grasp it where it is now"),
+    FailureMode("toppled", frozenset({"grasp"}), "target",
+                lambda arm, obj: {"kind": "upright", "object": obj, "tol_deg": TOPPLE_TOL_DEG}, 0.0, 3, _toppled,
+                "the object was knocked over: it must be stood up before a side grasp"),
+    FailureMode("drop", CARRY_ACTIONS, "held",
+                lambda arm, obj: {"kind": "not_grasped", "arm": arm, "min_opening": EMPTY_GRIP_M}, 0.0, 3, _drop,
+                "the held object fell out of the hand (fingers closed on nothing): pick it up and carry on"),
+    FailureMode("slip", CARRY_ACTIONS, "held",
+                lambda arm, obj: {"kind": "detached", "arm": arm, "object": obj, "tol": SLIP_TOL_M}, 0.01, 5, _drop,
+                "the held object slid out of the grasp point: treat as dropped, pick it up and carry on"),
+)
+"""Failure modes per atomic action type. IK infeasibility is not a feature-level failure: the conductor
+reports an unreachable keyframe as a recorded failure with the solver's message."""
+
+
+def _facts(texts: list[str], request: ArrangerRequest) -> State:
+    pos, _ = parse_literals(texts, request.domain, where="node facts")
+    return pos
+
+
+def _candidates(mode: FailureMode, edge: Any, u: State) -> list[tuple[str, str]]:
+    kinds = {a.name for a in edge.actions}
+    if not kinds & mode.actions:
+        return []
+    if mode.needs == "held":
+        return sorted((a[1], a[2]) for a in u if a[0] == "holding")
+    out = []
+    for a in edge.actions:
+        if a.name in mode.actions and isinstance(a.args.get("arm"), str) and isinstance(a.args.get("obj"), str):
+            out.append((a.args["arm"], a.args["obj"]))
+    return out
+
+
+def _branch(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: FailureMode, arm: str, obj: str,
+            start: State, goal: State, ops: list, seen: dict[str, SeenObject]) -> dict:
+    """One RecoveryProposal: monitor, recovery nodes and edges from the failure context to the merge node."""
+    from kintsugi.reasoning.composer import edge_actions
+
+    steps = plan(start, (goal, frozenset()), ops)
+    if not steps:
+        raise PlanningError("the failure leaves the merge node's facts already true; nothing to recover")
+    tag = f"{edge.id}.{mode.name}.{arm}"
+    nodes, edges = [], []
+    prev, state = edge.source, start
+    for i, op in enumerate(steps, 1):
+        after = op.apply(state)
+        last = i == len(steps)
+        target = edge.target if last else f"r.{tag}.{i}"
+        if not last:
+            constraints, gripper = node_constraints(request.domain, sorted(after - state), seen)
+            nodes.append({"id": target, "description": f"recovering from {mode.name}: {op.label} done",
+                          "constraints": constraints, "gripper": gripper})
+        edges.append({"id": f"re.{tag}.{i}", "source": prev, "target": target, "actions": edge_actions(op, seen),
+                      "cost": op.cost, "description": f"recovery for {mode.name}: {op.label}"})
+        prev, state = target, after
+    monitor = {"id": f"m.{tag}", "failure_mode": mode.name, "check": mode.check(arm, obj), "margin": mode.margin,
+               "window": mode.window, "recovery": edges[0]["id"], "description": mode.why}
+    return {"edge": edge.id, "monitor": monitor, "nodes": nodes, "edges": edges}
+
+
+def _short(exc: Exception, limit: int = 800) -> str:
+    """An error short enough to quote back to a model (hostile replies can make pydantic echo huge values)."""
+    text = str(exc)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def embedded_arrange(request: ArrangerRequest) -> ArrangerReply:
+    """Monitors and recovery branches for every nominal edge, from the knowledge base and the planner."""
+    try:
+        graph = TaskGraph.from_data(request.graph)
+    except GraphError as exc:
+        raise PlanningError(f"the graph to arrange is unusable: {_short(exc)}") from None
+    missing = [n.id for n in graph.nodes if n.id not in request.node_facts]
+    if missing:
+        raise PlanningError(f"the embedded arranger needs each node's facts (the composer's node_facts); "
+                            f"none for {missing[0]!r}")
+    seen = {o.name: o for o in request.objects}
+    arms = arms_named(request.task, [a.name for a in request.arms])
+    ops = ground(request.domain, arms, [o.name for o in request.objects if o.visible])
+    wanted = set(request.failure_modes)
+    proposals: list[dict] = []
+    notes: list[str] = []
+    for edge in graph.edges:
+        if edge.kind != "nominal":
+            continue
+        u = _facts(request.node_facts[edge.source], request)
+        v = _facts(request.node_facts[edge.target], request)
+        for mode in FAILURES:
+            if mode.name not in wanted:
+                continue
+            for arm, obj in _candidates(mode, edge, u):
+                try:
+                    proposals.append(_branch(request, graph, edge, mode, arm, obj, mode.after(u, arm, obj), v, ops,
+                                             seen))
+                except PlanningError as exc:
+                    notes.append(f"{edge.id} {mode.name}({arm}, {obj}): no recovery ({exc})")
+    covered = sorted({p["monitor"]["failure_mode"] for p in proposals})
+    why = f"{len(proposals)} branches ({', '.join(covered) or 'none'})" + (f"; {'; '.join(notes)}" if notes else "")
+    return ArrangerReply(proposals=proposals, reasoning=why[:4000])
+
+
+def check_arrangement(reply: ArrangerReply, graph: TaskGraph, vocabulary: Any = None) -> FilterResult:
+    """Insert the proposals into the nominal graph, check it (names against the task's vocabulary when
+    given), keep only forward-moving branches (Eq. 8). Any problem is a BadReply naming it (an endpoint is
+    asked to repair once)."""
+    try:
+        proposals = parse_proposals(list(reply.proposals))
+        augmented = augment(graph, proposals)
+        if vocabulary is not None:
+            augmented.validate(vocabulary)
+        return forward_filter(augmented)
+    except GraphError as exc:
+        raise BadReply(f"the recovery proposals are unusable: {_short(exc)}") from None
+
+
+def ask_arrange(reasoner: Any, request: ArrangerRequest, graph: TaskGraph, vocabulary: Any
+                ) -> tuple[FilterResult, ArrangerReply]:
+    """The arranger role on any backend (recorded when the reasoner records) -> the Eq. 8-filtered graph,
+    checked against the task's vocabulary."""
+    from kintsugi.reasoning.roles import ask_role
+
+    out: dict[str, FilterResult] = {}
+
+    def check(reply: ArrangerReply) -> ArrangerReply:
+        out["result"] = check_arrangement(reply, graph, vocabulary)
+        return reply
+
+    reply = ask_role(reasoner, "arranger", request, ArrangerReply, embedded_arrange, check, system="system_taskgraph")
+    return out["result"], reply
+
+
+__all__ = ["FAILURES", "FailureMode", "ask_arrange", "check_arrangement", "embedded_arrange"]

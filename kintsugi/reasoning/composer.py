@@ -1,0 +1,187 @@
+"""The composer role (AgentChord Eq. 2): instruction + first observation -> nominal task graph.
+
+`embedded_compose` plans, it does not follow a per-task script: it reads the observed state as facts
+(what perception and the arms' sensors report), parses the task's goal predicates, grounds the domain's
+operators over the scene and searches for the cheapest plan (`symbolic.plan`). Each step becomes an edge
+(its atomic actions, cost in control steps) into a sub-goal node whose constraints check the facts the step
+made true. `ask_compose` runs the role on any backend and checks the reply into a `TaskGraph`.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Any
+
+from kintsugi.reasoning.jsontext import BadReply
+from kintsugi.reasoning.symbolic import Atom, GroundOp, PlanningError, State, atom_text, ground, parse_literals, plan
+from kintsugi.reasoning.taskgraph_types import ComposerReply, ComposerRequest, Domain, SeenObject
+from kintsugi.taskgraph.base import GraphError
+from kintsugi.taskgraph.model import TaskGraph
+from kintsugi.taskgraph.vocabulary import Vocabulary
+
+ON_TABLE_Z_M = 0.03
+"""An object whose lowest point is this close to the table top stands on it."""
+LIFTED_Z_M = 0.05
+"""A held object whose lowest point is this high is clear of the table."""
+_FN = re.compile(r"^\$(x|y|z|mirror)\(\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*(?:,\s*(-?[0-9.eE+-]+)\s*)?\)$")
+
+
+def observed_facts(request: Any, domain: Domain) -> State:
+    """Facts read off the observation, for the predicates the domain declares (closed world: the rest are
+    false): hand_empty/holding from the arms' pads, upright from perception's uprightness, on_table from the
+    object's lowest point (lifted: held and clear of it), released when no arm holds it."""
+    known = {p.name for p in domain.predicates}
+    held = {o: a.name for a in request.arms for o in a.holding}
+    facts: set[Atom] = set()
+    for a in request.arms:
+        if "hand_empty" in known and not a.holding:
+            facts.add(("hand_empty", a.name))
+        if "holding" in known:
+            facts |= {("holding", a.name, o) for o in a.holding}
+    for o in request.objects:
+        if not o.visible:
+            continue
+        if "upright" in known and o.upright:
+            facts.add(("upright", o.name))
+        if "on_table" in known and o.bottom_z is not None and o.bottom_z < ON_TABLE_Z_M and o.name not in held:
+            facts.add(("on_table", o.name))
+        if "lifted" in known and o.bottom_z is not None and o.bottom_z > LIFTED_Z_M and o.name in held:
+            facts.add(("lifted", o.name))
+        if "released" in known and o.name not in held:
+            facts.add(("released", o.name))
+    return frozenset(facts)
+
+
+def arms_named(task: str, arms: list[str]) -> list[str]:
+    """The arms an instruction asks for ("using the right arm"); all arms when it names none or both."""
+    text = task.lower()
+    named = [a for a in arms if re.search(rf"\b{a}\s+(arm|hand)\b", text)]
+    return named or list(arms)
+
+
+def fill(value: Any, binding: dict[str, str], seen: dict[str, SeenObject]) -> Any:
+    """Instantiate a template: `?p` -> its value, `$x(?obj)` -> the object's perceived centroid x (y, z),
+    `$mirror(?arm, v)` -> v for the right arm, -v for the left; lists and dicts recursively."""
+    if isinstance(value, dict):
+        return {k: fill(v, binding, seen) for k, v in value.items()}
+    if isinstance(value, list):
+        return [fill(v, binding, seen) for v in value]
+    if not isinstance(value, str):
+        return value
+    if value in binding:
+        return binding[value]
+    m = _FN.match(value)
+    if not m:
+        return value
+    fn, param, num = m.groups()
+    if param not in binding:
+        raise PlanningError(f"template {value!r} names undeclared parameter {param}")
+    arg = binding[param]
+    if fn == "mirror":
+        if num is None:
+            raise PlanningError(f"template {value!r} needs a number: $mirror(?arm, v)")
+        return float(num) if arg == "right" else -float(num)
+    obj = seen.get(arg)
+    if obj is None or obj.centroid is None:
+        raise PlanningError(f"template {value!r}: object {arg!r} was not perceived, so its position is unknown")
+    return round(float(obj.centroid["xyz".index(fn)]), 4)
+
+
+def _positional(binding: dict[str, str], args: tuple[str, ...]) -> dict[str, str]:
+    return {f"?{i + 1}": v for i, v in enumerate(args)}
+
+
+def node_constraints(domain: Domain, atoms: list[Atom], seen: dict[str, SeenObject]) -> tuple[list, dict]:
+    """Constraints and gripper states checking the given facts on a sub-goal node."""
+    specs = {p.name: p for p in domain.predicates}
+    constraints: list = []
+    gripper: dict[str, str] = {}
+    for a in atoms:
+        spec = specs[a[0]]
+        b = _positional({}, a[1:])
+        constraints += [fill(c, b, seen) for c in spec.constraints]
+        if spec.gripper is not None and spec.params and spec.params[0] == "arm":
+            gripper[a[1]] = spec.gripper
+    return constraints, gripper
+
+
+def edge_actions(op: GroundOp, seen: dict[str, SeenObject]) -> list:
+    return [fill(a, dict(op.binding), seen) for a in op.spec.actions]
+
+
+def build_graph(task: str, domain: Domain, initial: State, steps: list[GroundOp],
+                seen: dict[str, SeenObject]) -> ComposerReply:
+    """A chain graph start -> s1 -> ... -> goal from a plan, with the symbolic state of every node."""
+    if not steps:
+        raise PlanningError("the goal already holds in the observed scene; there is nothing to do")
+    nodes = [{"id": "start", "description": "the observed scene"}]
+    edges = []
+    facts = {"start": sorted(atom_text(a) for a in initial)}
+    operators = {}
+    state, prev = initial, "start"
+    for i, op in enumerate(steps, 1):
+        after = op.apply(state)
+        made = sorted(after - state)
+        constraints, gripper = node_constraints(domain, made, seen)
+        nid, eid = f"s{i}_{op.name}", f"e{i}_{op.name}"
+        nodes.append({"id": nid, "description": ", ".join(atom_text(a) for a in made) or op.label,
+                      "constraints": constraints, "gripper": gripper})
+        edges.append({"id": eid, "source": prev, "target": nid, "actions": edge_actions(op, seen),
+                      "cost": op.cost, "description": op.label})
+        facts[nid] = sorted(atom_text(a) for a in after)
+        operators[eid] = op.label
+        state, prev = after, nid
+    graph = {"task": task, "start": "start", "goal": prev, "nodes": nodes, "edges": edges}
+    why = "plan: " + " -> ".join(op.label for op in steps)
+    return ComposerReply(graph=graph, node_facts=facts, edge_operators=operators, reasoning=why)
+
+
+def _short(exc: Exception, limit: int = 800) -> str:
+    """An error short enough to quote back to a model (hostile replies can make pydantic echo huge values)."""
+    text = str(exc)
+    return text if len(text) <= limit else text[: limit - 3] + "..."
+
+
+def embedded_compose(request: ComposerRequest) -> ComposerReply:
+    """Plan the nominal graph from the goal predicates and the observed facts (no task script)."""
+    domain = request.domain
+    seen = {o.name: o for o in request.objects}
+    arms = arms_named(request.task, [a.name for a in request.arms])
+    initial = observed_facts(request, domain)
+    goal = parse_literals(list(request.goal), domain, where="task goal")
+    steps = plan(initial, goal, ground(domain, arms, [o.name for o in request.objects if o.visible]))
+    return build_graph(request.task, domain, initial, steps, seen)
+
+
+def check_composition(reply: ComposerReply, vocabulary: Vocabulary) -> TaskGraph:
+    """The reply's graph, parsed and checked against the task's vocabulary; BadReply names what is wrong
+    (so an endpoint gets one repair round)."""
+    try:
+        graph = TaskGraph.from_data(reply.graph, vocabulary)
+    except GraphError as exc:
+        raise BadReply(f"the task graph is unusable: {_short(exc)}") from None
+    stray = [k for k in (*reply.node_facts, *reply.edge_operators) if k not in graph.node_map and k not in graph.edge_map]
+    if stray:
+        raise BadReply(f"node_facts/edge_operators name {stray[0]!r}, which is not a node or edge of the graph")
+    nominal = [n for n in graph.nodes if n.kind != "nominal"] + [e for e in graph.edges if e.kind != "nominal"]
+    if nominal:
+        raise BadReply(f"the composer's graph must be nominal; {nominal[0].id!r} is a recovery element "
+                       "(recovery branches are the arranger's job)")
+    return graph
+
+
+def ask_compose(reasoner: Any, request: ComposerRequest, vocabulary: Vocabulary) -> tuple[TaskGraph, ComposerReply]:
+    """The composer role on any backend (recorded when the reasoner records) -> a checked nominal graph."""
+    from kintsugi.reasoning.roles import ask_role
+
+    out: dict[str, TaskGraph] = {}
+
+    def check(reply: ComposerReply) -> ComposerReply:
+        out["graph"] = check_composition(reply, vocabulary)
+        return reply
+
+    reply = ask_role(reasoner, "composer", request, ComposerReply, embedded_compose, check, system="system_taskgraph")
+    return out["graph"], reply
+
+
+__all__ = ["ask_compose", "check_composition", "embedded_compose", "observed_facts", "PlanningError"]

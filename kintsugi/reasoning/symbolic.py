@@ -1,0 +1,168 @@
+"""A small STRIPS planner: typed operators grounded over the scene's arms and objects, cheapest plan by
+uniform-cost search. The embedded composer plans the nominal graph with it and the embedded arranger plans
+each recovery branch (from the state a failure leaves to a merge node) with it.
+
+States are frozensets of ground atoms `("holding", "right", "bottle")` under the closed-world assumption.
+"""
+
+from __future__ import annotations
+
+import heapq
+import itertools
+from dataclasses import dataclass
+
+from kintsugi.errors import ReasoningError
+from kintsugi.reasoning.taskgraph_types import Domain, OperatorSpec, parse_atom
+
+Atom = tuple[str, ...]
+State = frozenset[Atom]
+MAX_EXPANSIONS = 50_000
+"""A search that expands more states than this gives up (a domain too loose for the embedded planner)."""
+
+
+class PlanningError(ReasoningError):
+    """No plan: unknown predicate, unreachable goal, or a search that exceeded its budget."""
+
+
+@dataclass(frozen=True)
+class GroundOp:
+    name: str
+    binding: tuple[tuple[str, str], ...]
+    """(?param, value) in declaration order."""
+    pre_pos: frozenset[Atom]
+    pre_neg: frozenset[Atom]
+    add: frozenset[Atom]
+    delete: frozenset[Atom]
+    cost: float
+    spec: OperatorSpec
+    wild: tuple[Atom, ...] = ()
+    """Delete patterns with `_` (any value) in some places, e.g. over(bottle, _)."""
+
+    @property
+    def label(self) -> str:
+        return f"{self.name}({', '.join(v for _, v in self.binding)})"
+
+    def applicable(self, s: State) -> bool:
+        return self.pre_pos <= s and not (self.pre_neg & s)
+
+    def apply(self, s: State) -> State:
+        if self.wild:
+            s = frozenset(a for a in s if not any(matches(a, w) for w in self.wild))
+        return (s - self.delete) | self.add
+
+
+def matches(atom: Atom, pattern: Atom) -> bool:
+    return len(atom) == len(pattern) and all(p in ("_", a) for a, p in zip(atom, pattern))
+
+
+def atom_text(a: Atom) -> str:
+    return f"{a[0]}({', '.join(a[1:])})"
+
+
+def parse_literals(texts: list[str], domain: Domain, binding: dict[str, str] | None = None,
+                   where: str = "goal", allow_wild: bool = False) -> tuple[frozenset[Atom], frozenset[Atom]]:
+    """Literals -> (positive atoms, negated atoms), parameters filled from `binding`; unknown predicates,
+    wrong arity or unbound parameters raise PlanningError naming the literal."""
+    arity = {p.name: len(p.params) for p in domain.predicates}
+    pos: set[Atom] = set()
+    neg: set[Atom] = set()
+    for text in texts:
+        try:
+            positive, name, args = parse_atom(text)
+        except ValueError as exc:
+            raise PlanningError(f"{where}: {exc}") from None
+        if name not in arity:
+            raise PlanningError(f"{where}: unknown predicate {name!r} in {text!r}; known: {', '.join(sorted(arity))}")
+        if len(args) != arity[name]:
+            raise PlanningError(f"{where}: {name} takes {arity[name]} argument(s), {text!r} gives {len(args)}")
+        vals = []
+        for a in args:
+            if a.startswith("?"):
+                if binding is None or a not in binding:
+                    raise PlanningError(f"{where}: parameter {a} in {text!r} is not declared")
+                a = binding[a]
+            vals.append(a)
+        if "_" in vals and not (allow_wild and positive):
+            raise PlanningError(f"{where}: `_` (any) is allowed in delete effects only, not in {text!r}")
+        (pos if positive else neg).add((name, *vals))
+    return frozenset(pos), frozenset(neg)
+
+
+def ground(domain: Domain, arms: list[str], objects: list[str]) -> list[GroundOp]:
+    """Every operator instance over the given arms and objects (distinct objects per instance)."""
+    pools = {"arm": arms, "object": objects}
+    out: list[GroundOp] = []
+    for op in domain.operators:
+        names = list(op.params)
+        for values in itertools.product(*(pools[op.params[n]] for n in names)):
+            objs = [v for n, v in zip(names, values) if op.params[n] == "object"]
+            if len(set(objs)) != len(objs):
+                continue
+            b = dict(zip(names, values))
+            where = f"operator {op.name}"
+            pre_pos, pre_neg = parse_literals(op.pre, domain, b, where)
+            add, add_neg = parse_literals(op.add, domain, b, where)
+            delete, del_neg = parse_literals(op.delete, domain, b, where, allow_wild=True)
+            if add_neg or del_neg:
+                raise PlanningError(f"{where}: effects must be positive atoms (list removals under `delete`)")
+            wild = tuple(a for a in delete if "_" in a)
+            exact = frozenset(a for a in delete if "_" not in a) - add
+            out.append(GroundOp(op.name, tuple(b.items()), pre_pos, pre_neg, add, exact, op.cost, op, wild))
+    return out
+
+
+def satisfies(s: State, goal: tuple[frozenset[Atom], frozenset[Atom]]) -> bool:
+    pos, neg = goal
+    return pos <= s and not (neg & s)
+
+
+def plan(initial: State, goal: tuple[frozenset[Atom], frozenset[Atom]], ops: list[GroundOp],
+         max_expansions: int = MAX_EXPANSIONS) -> list[GroundOp]:
+    """The cheapest operator sequence from `initial` to a state satisfying `goal` (uniform-cost search;
+    ties broken by insertion order, so the answer is deterministic)."""
+    if satisfies(initial, goal):
+        return []
+    counter = itertools.count()
+    frontier: list[tuple[float, int, State]] = [(0.0, next(counter), initial)]
+    best: dict[State, float] = {initial: 0.0}
+    parent: dict[State, tuple[State, GroundOp]] = {}
+    expanded = 0
+    while frontier:
+        cost, _, s = heapq.heappop(frontier)
+        if cost > best.get(s, float("inf")):
+            continue
+        if satisfies(s, goal):
+            steps: list[GroundOp] = []
+            while s in parent:
+                s, op = parent[s]
+                steps.append(op)
+            return steps[::-1]
+        expanded += 1
+        if expanded > max_expansions:
+            raise PlanningError(f"no plan within {max_expansions} expanded states; the domain is too loose "
+                                "or the goal unreachable")
+        for op in ops:
+            if not op.applicable(s):
+                continue
+            t = op.apply(s)
+            c = cost + op.cost
+            if c < best.get(t, float("inf")):
+                best[t] = c
+                parent[t] = (s, op)
+                heapq.heappush(frontier, (c, next(counter), t))
+    missing = ", ".join(sorted(atom_text(a) for a in goal[0] - _reachable_atoms(initial, ops))) or "(a combination)"
+    raise PlanningError(f"the goal cannot be reached from the observed state with these actions; "
+                        f"never achievable: {missing}")
+
+
+def _reachable_atoms(initial: State, ops: list[GroundOp]) -> frozenset[Atom]:
+    """Relaxed reachability (delete effects ignored): for naming the goal atoms no action can produce."""
+    atoms = set(initial)
+    changed = True
+    while changed:
+        changed = False
+        for op in ops:
+            if op.pre_pos <= atoms and not op.add <= atoms:
+                atoms |= op.add
+                changed = True
+    return frozenset(atoms)
