@@ -17,6 +17,7 @@ from kintsugi.tasks.tabletop.arm_model import f
 from kintsugi.tasks.tabletop.config import ObjectSection, ObjectsSection
 
 CUP_SEGMENTS = 12
+CAPSULE_SLICES = 3
 TRAY_WALL = 0.006
 
 
@@ -73,7 +74,15 @@ def _geoms(kind: str, o: ObjectSection) -> list[str]:
     s, rgba, m = o.size_m, f(*o.rgba), o.mass_kg
     condim = 6 if kind in ROLLING else 3
     common = f'rgba="{rgba}" friction="{o.friction:.6g} 0.005 0.0001" condim="{condim}"'
-    if kind in ("bottle", "plate", "capsule"):
+    if kind == "capsule":
+        # Stacked slices: a top-down pad (a vertical capsule) parallel to one cylinder's side gets
+        # a single contact anywhere along it, often at opposite rims on the two sides, and the
+        # squeeze then spits the light capsule out; one contact per slice keeps the pinch level.
+        hs = s[1] / CAPSULE_SLICES
+        return [f'<geom name="capsule_body{i}" type="cylinder" size="{f(s[0], hs)}" '
+                f'pos="0 0 {-s[1] + (2 * i + 1) * hs:.6g}" mass="{m / CAPSULE_SLICES:.6g}" {common}/>'
+                for i in range(CAPSULE_SLICES)]
+    if kind in ("bottle", "plate"):
         return [f'<geom name="{kind}_body" type="cylinder" size="{f(s[0], s[1])}" mass="{m:.6g}" {common}/>']
     if kind == "cup":
         r, hh, wall = s
