@@ -315,6 +315,49 @@ def explain(
     explain_record(rec, console)
 
 
+@app.command()
+def graph(
+    task: Annotated[str, typer.Argument(help="a tabletop (system B) task, see `kintsugi tasks`")],
+    condition: Annotated[str, typer.Option(help="layout condition of the first observation: none, pose, ...")] = "none",
+    seed: Annotated[int, typer.Option(min=0, help="seed of the layout draw")] = 0,
+    out: Annotated[Optional[Path], typer.Option(help="picture .png (default: runs/graph_<task>.png)")] = None,
+    dot: Annotated[Optional[Path], typer.Option(help="also write the graph as a graphviz .dot file")] = None,
+    json_out: Annotated[Optional[Path], typer.Option("--json", help="also write the graph as JSON")] = None,
+    set_: SetOpt = None,
+    reasoner: ReasonerOpt = "embedded",
+    model: ModelOpt = None,
+    base_url: BaseUrlOpt = None,
+    api_key_env: KeyEnvOpt = "OPENAI_API_KEY",
+    structured_output: StructuredOpt = "auto",
+) -> None:
+    """Compile a task's recovery-augmented task graph (composer, arranger, Eq. 8) from its first observation;
+    print it and draw it (nominal solid blue, recovery dashed pink)."""
+    from kintsugi.methods.agentchord.show import compile_for_task, print_graph
+    from kintsugi.outputs import check_output_file
+
+    try:
+        png = check_output_file(out or Path("runs") / f"graph_{task}.png", "picture", (".png",))
+        extra = [(p, k, s) for p, k, s in ((dot, "dot file", ".dot"), (json_out, "graph JSON", ".json")) if p]
+        paths = [check_output_file(p, k, (s,)) for p, k, s in extra]
+        compiled = compile_for_task(task, condition, seed, _overrides(set_),
+                                    _reasoner(reasoner, model, base_url, api_key_env, structured_output))
+    except KintsugiError as exc:
+        _fail(exc)
+        return
+    print_graph(compiled, console)
+    from kintsugi.taskgraph.render import to_dot, write_graph_picture
+
+    try:
+        png.parent.mkdir(parents=True, exist_ok=True)
+        write_graph_picture(compiled.graph, png)
+        for (_, kind, _), path in zip(extra, paths):
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(to_dot(compiled.graph) if kind == "dot file" else compiled.graph.to_json(indent=2))
+    except OSError as exc:
+        _fail(f"cannot write the graph files: {exc}")
+    console.print(escape("picture: " + ", ".join(str(p) for p in [png, *paths])))
+
+
 def main() -> None:  # pragma: no cover
     app()
 
