@@ -121,4 +121,6 @@ SPEC = TaskSpec(
     script=script,
     scorer=CoffeeScorer,
     targets=("tray_forward",),
+    shift=("tray", (0, 2)),
+    knock=("capsule", (0, 0)),
 )

@@ -22,10 +22,15 @@ CONDITIONS: dict[str, str] = {
     "pose": "object start poses drawn from objects.<name>.x_m / y_m / yaw_deg, no disturbance",
     "drop": "randomized poses; with probability disturbance.drop_p per atomic action the held object is "
             "released at a random instant of it",
-    "all": "randomized poses and every disturbance implemented so far (drop)",
+    "shift": "randomized poses; the task's target object is slid disturbance.shift_m across the table during "
+             "one of its early actions",
+    "knock": "randomized poses; a standing object is pushed over (disturbance.knock_push) during an early action",
+    "all": "randomized poses and every disturbance the task has (drop, shift, knock)",
 }
-POSE_CONDITIONS = ("pose", "drop", "all")
+POSE_CONDITIONS = ("pose", "drop", "shift", "knock", "all")
 DROP_CONDITIONS = ("drop", "all")
+SHIFT_CONDITIONS = ("shift", "all")
+KNOCK_CONDITIONS = ("knock", "all")
 MAX_TRIES = 200
 
 
@@ -34,12 +39,14 @@ class TrialParams(StrictModel):
 
     start: dict[str, StartPose]
     drop_p: float = 0.0
+    shift: bool = False
+    knock: bool = False
 
     def flat(self) -> dict[str, float]:
         out: dict[str, float] = {}
         for k, p in self.start.items():
             out |= {f"{k}_x": round(p.x, 5), f"{k}_y": round(p.y, 5), f"{k}_yaw_deg": round(p.yaw_deg, 3)}
-        return out | {"drop_p": self.drop_p}
+        return out | {"drop_p": self.drop_p, "shift": float(self.shift), "knock": float(self.knock)}
 
 
 def _footprint(kind: str, cfg: TabletopConfig) -> float:
@@ -48,9 +55,9 @@ def _footprint(kind: str, cfg: TabletopConfig) -> float:
 
 
 def sample_params(cfg: TabletopConfig, objects: tuple[str, ...], condition: str, seed: int,
-                  min_gap_m: float = 0.03) -> TrialParams:
-    if condition not in CONDITIONS:
-        raise ConfigError(f"unknown condition {condition!r}; known: {', '.join(CONDITIONS)}")
+                  min_gap_m: float = 0.03, known: dict[str, str] = CONDITIONS) -> TrialParams:
+    if condition not in known:
+        raise ConfigError(f"unknown condition {condition!r}; known: {', '.join(known)}")
     rng = np.random.default_rng(seed)
     nominal = {k: StartPose(x=sum(getattr(cfg.objects, k).x_m) / 2, y=sum(getattr(cfg.objects, k).y_m) / 2,
                             yaw_deg=sum(getattr(cfg.objects, k).yaw_deg) / 2) for k in objects}
@@ -67,7 +74,9 @@ def sample_params(cfg: TabletopConfig, objects: tuple[str, ...], condition: str,
     else:
         raise ConfigError(f"could not place {', '.join(objects)} apart in {MAX_TRIES} draws; widen objects.*.x_m/y_m")
     return TrialParams(start=drawn if condition in POSE_CONDITIONS else nominal,
-                       drop_p=cfg.disturbance.drop_p if condition in DROP_CONDITIONS else 0.0)
+                       drop_p=cfg.disturbance.drop_p if condition in DROP_CONDITIONS else 0.0,
+                       shift=condition in SHIFT_CONDITIONS and "shift" in known,
+                       knock=condition in KNOCK_CONDITIONS and "knock" in known)
 
 
 def _separated(poses: dict[str, StartPose], cfg: TabletopConfig, gap: float) -> bool:

@@ -180,6 +180,12 @@ class DisturbanceSection(StrictModel):
     """Probability, per atomic action, that a held object is released at a random instant of it."""
     drop_release_s: float = Field(0.3, gt=0)
     """How long the gripper is forced open to let the object go."""
+    shift_m: Range = (0.03, 0.06)
+    """`shift`: how far the task's target object is slid across the table."""
+    shift_duration_s: float = Field(0.4, gt=0)
+    knock_push: float = Field(1.0, gt=0, le=20)
+    """`knock`: horizontal push at the object's top, in units of its weight."""
+    knock_duration_s: float = Field(0.15, gt=0, le=2)
 
 
 class PerceptionSection(StrictModel):

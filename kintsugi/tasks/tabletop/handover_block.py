@@ -116,4 +116,5 @@ SPEC = TaskSpec(
     script=script,
     scorer=HandoverScorer,
     targets=("block",),
+    shift=("block", (0, 0)),
 )

@@ -82,4 +82,6 @@ SPEC = TaskSpec(
           "upright(cup)", "on_table(cup)", "released(cup)"),
     script=script,
     scorer=make_scorer,
+    shift=("cup", (0, 0)),
+    knock=("bottle", (0, 0)),
 )

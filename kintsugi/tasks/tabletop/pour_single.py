@@ -111,4 +111,6 @@ SPEC = TaskSpec(
     goal=("poured(bottle, cup)", "upright(bottle)", "on_table(bottle)", "released(bottle)", "upright(cup)"),
     script=script,
     scorer=PourScorer,
+    shift=("cup", (0, 2)),
+    knock=("bottle", (0, 0)),
 )

@@ -119,4 +119,5 @@ SPEC = TaskSpec(
     script=script,
     scorer=RearrangeScorer,
     targets=("fork", "spoon"),
+    shift=("plate", (0, 2)),
 )

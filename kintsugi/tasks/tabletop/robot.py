@@ -9,6 +9,7 @@ in every observation's `features_source`).
 
 from __future__ import annotations
 
+import warnings
 from typing import Any, Callable, Iterable, Literal, Protocol
 
 import cv2
@@ -75,6 +76,14 @@ class ActionHook(Protocol):
     def begin_action(self, planned_s: float, arms: tuple[str, ...]) -> None: ...
 
 
+def _rpy_deg(rot: np.ndarray) -> Vec3:
+    """Extrinsic x-y-z angles; at gimbal lock (gripper horizontal, pitch 90 deg) scipy sets the third
+    to zero, which still describes the same rotation, so its warning is noise here."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        return tuple(float(v) for v in Rotation.from_matrix(rot).as_euler("xyz", degrees=True))
+
+
 def png(image: np.ndarray) -> bytes:
     ok, buf = cv2.imencode(".png", cv2.cvtColor(image, cv2.COLOR_RGB2BGR))
     if not ok:
@@ -114,7 +123,7 @@ class TabletopRobot:
         return ArmState(
             joints_deg=tuple(round(float(v), 3) for v in np.degrees(w.joint_positions(arm))),
             tcp_pos=tuple(float(v) for v in pos),
-            tcp_rpy_deg=tuple(float(v) for v in Rotation.from_matrix(rot).as_euler("xyz", degrees=True)),
+            tcp_rpy_deg=_rpy_deg(rot),
             gripper_opening_m=w.gripper_opening(arm), gripper_closed=w.gripper_commanded_closed(arm),
             touching=touching, pad_force_n=force)
 

@@ -41,6 +41,10 @@ class TaskSpec:
     script: Script
     scorer: Callable[[TabletopConfig], Scorer]
     targets: tuple[str, ...] = ()
+    shift: tuple[str, tuple[int, int]] | None = None
+    """`shift` condition: the object slid and the window of action indices (0-based) it happens in."""
+    knock: tuple[str, tuple[int, int]] | None = None
+    """`knock` condition: the standing object pushed over, and its action window; None: no such condition."""
 
 
 # --- ground-truth predicates shared by the tasks' scorers ------------------------

@@ -17,6 +17,7 @@ from kintsugi.errors import ConfigError, KintsugiError
 from kintsugi.methods import METHODS
 from kintsugi.tasks import TASKS
 from kintsugi.tasks.tabletop.conditions import CONDITIONS, DropDisturbance, TrialParams, sample_params
+from kintsugi.tasks.tabletop.disturbances import Disturbances, KnockDisturbance, ShiftDisturbance
 from kintsugi.tasks.tabletop.config import TabletopConfig
 from kintsugi.tasks.tabletop.context import TabletopContext
 from kintsugi.tasks.tabletop.robot import TabletopRobot
@@ -45,29 +46,48 @@ class TabletopTask:
     config_type = TabletopConfig
     variants_help = "default (one variant; the layout is randomized by the condition)"
     default_variants = VARIANTS
-    conditions = CONDITIONS
     reference_method = "scripted"
     """The method that proves the task (contract tests run it)."""
 
     def __init__(self, spec: TaskSpec) -> None:
         self.spec = spec
         self.name = spec.name
+        missing = {"shift": spec.shift, "knock": spec.knock}
+        self.conditions = {k: v for k, v in CONDITIONS.items() if k not in missing or missing[k] is not None}
+        """`shift` / `knock` only where the task names an object for them."""
 
     def config(self, overrides: dict | list) -> TabletopConfig:
         return apply_overrides(TabletopConfig(), overrides)
 
     def build(self, cfg: TabletopConfig, condition: str, seed: int
-              ) -> tuple[TabletopWorld, Scorer, DropDisturbance | None, TrialParams]:
-        """The trial's world with its scorer and disturbance watching every control tick."""
-        params = sample_params(cfg, self.spec.objects, condition, seed)
+              ) -> tuple[TabletopWorld, Scorer, Disturbances | None, TrialParams]:
+        """The trial's world with its scorer and disturbances watching every control tick."""
+        self._check_targets(cfg)
+        params = sample_params(cfg, self.spec.objects, condition, seed, known=self.conditions)
         world = TabletopWorld(cfg, self.spec.objects, params.start, self.spec.targets)
         scorer = self.spec.scorer(cfg)
         world.watchers.append(scorer.watch)
-        drop = None
+        parts: list = []
         if params.drop_p > 0:
-            drop = DropDisturbance(world, params.drop_p, cfg.disturbance.drop_release_s, seed)
-            world.watchers.append(drop)
-        return world, scorer, drop, params
+            parts.append(DropDisturbance(world, params.drop_p, cfg.disturbance.drop_release_s, seed))
+        if params.shift and self.spec.shift is not None:
+            parts.append(ShiftDisturbance(world, *self.spec.shift, cfg.disturbance, seed))
+        if params.knock and self.spec.knock is not None:
+            parts.append(KnockDisturbance(world, *self.spec.knock, cfg.disturbance, seed))
+        hook = Disturbances(parts) if parts else None
+        if hook is not None:
+            world.watchers.append(hook)
+        return world, scorer, hook, params
+
+    def _check_targets(self, cfg: TabletopConfig) -> None:
+        for name in self.spec.targets:
+            if name not in cfg.targets:
+                raise ConfigError(f"targets.{name} is missing: task {self.name} needs it; "
+                                  f"configured: {', '.join(cfg.targets)}")
+            rel = cfg.targets[name].relative_to
+            if rel is not None and rel not in self.spec.objects:
+                raise ConfigError(f"targets.{name}.relative_to is {rel!r}, which is not in task {self.name}; "
+                                  f"its objects: {', '.join(self.spec.objects)}")
 
     def run(self, spec: TrialSpec, echo: Callable[[str], None] | None = None) -> TrialRecord:
         import kintsugi.methods.builtin  # noqa: F401 - registers the built-in methods
