@@ -85,7 +85,8 @@ class MPPI:
         self.ctrlrange = model.actuator_ctrlrange.copy()
         width = self.ctrlrange[:, 1] - self.ctrlrange[:, 0]
         ramp = np.linspace(1.0, cfg.noise_ramp, cfg.knots) if cfg.knots > 1 else np.ones(1)
-        self._sigma = cfg.noise_frac * ramp[:, None] * width[None, :]  # (knots, nu)
+        self._sigma0 = cfg.noise_frac * ramp[:, None] * width[None, :]  # (knots, nu)
+        self._sigma = self._sigma0.copy()
         self.last = IterationStats()
         self.last_batch: RolloutBatch | None = None
         self._pinned: dict[int, float] = {}
@@ -117,6 +118,23 @@ class MPPI:
         self._pinned[actuator] = float(np.clip(value, lo, hi))
         if self.nominal is not None:
             self.nominal[:, actuator] = self._pinned[actuator]
+
+    def hold(self, actuator: int, value: float) -> None:
+        """Reset one actuator's planned command to a constant (the plan is re-optimised from there).
+
+        A saturated actuator (a servo pressing at its force limit) makes every nearby sample
+        cost the same; re-seeding the plan where the gradient is takes it out of that plateau.
+        """
+        if self.nominal is None:
+            raise ConfigError("no plan yet: call step() first")
+        lo, hi = self.ctrlrange[actuator]
+        self.nominal[:, actuator] = float(np.clip(value, lo, hi))
+
+    def set_noise_scale(self, scale: float) -> None:
+        """Scale the sampling noise (e.g. fine force regulation wants millimetres, reaching centimetres)."""
+        if not np.isfinite(scale) or scale < 0:
+            raise ConfigError(f"noise scale must be a finite number >= 0, got {scale}")
+        self._sigma = self._sigma0 * scale
 
     def close(self) -> None:
         self.engine.close()

@@ -60,3 +60,64 @@ def make_expert(ctx: Any) -> Expert:
 def make_expert_fsm(ctx: Any) -> Expert:
     _check(ctx, "expert-fsm")
     return Expert(ctx, staged=True)
+
+
+class MPPISysId:
+    """Expert-FSM costs on a planning world from a wrong prior, refitted after every failed attempt."""
+
+    def __init__(self, ctx: Any) -> None:
+        from kintsugi.tasks.contact.experts import expert_design
+
+        self.ctx = ctx
+        self.design = expert_design(ctx.task.name, staged=True)
+        self.history: list[dict[str, float]] = []
+
+    def prior(self) -> dict[str, Any]:
+        """Nominal (catalogue) physics scaled by the configured error: never the trial's truth."""
+        from kintsugi.tasks.contact.objects import Physics
+
+        s = self.ctx.cfg.sysid
+        return {k: Physics(mass_kg=p.mass_kg * s.prior_mass_scale, friction=p.friction * s.prior_friction_scale)
+                for k, p in self.ctx.nominal.items()}
+
+    def run(self, robot: Any, log: TrialLog) -> bool:
+        from kintsugi.tasks.contact.execute import run_attempt
+        from kintsugi.tasks.contact.identify import BeliefFitter
+        from kintsugi.tasks.contact.world import PlanningWorld
+
+        cfg, obj = self.ctx.cfg, self.ctx.task.target
+        planning = PlanningWorld(cfg, self.ctx.known, self.prior())
+        fitter = BeliefFitter(planning, obj, cfg.sysid.mass_bounds_kg, cfg.sysid.friction_bounds)
+        self._note(planning, obj)
+        for attempt in range(cfg.sysid.max_attempts):
+            if attempt:
+                robot.restart()
+                log.event(robot.sim_time, "restart", f"attempt {attempt + 1} of {cfg.sysid.max_attempts}")
+            robot.new_log()
+            result, _ = run_attempt(cfg, robot, planning, self.design(self.ctx), log,
+                                    seed=self.ctx.seed + 1000 * attempt)
+            if result.reached:
+                return True
+            if attempt + 1 == cfg.sysid.max_attempts:
+                break
+            added = fitter.add(robot.new_log())
+            phys, fit = fitter.fit()
+            self._note(planning, obj)
+            log.event(robot.sim_time, "sysid", f"{added} new windows ({len(fitter.logs)} in all): {obj} mass "
+                      f"{phys.mass_kg:.3f} kg, friction {phys.friction:.3f} (loss {fit.prior_loss:.3g} -> {fit.loss:.3g})")
+        return False
+
+    def _note(self, planning: Any, obj: str) -> None:
+        p = planning.physics_of(obj)
+        self.history.append({"mass_kg": round(p.mass_kg, 5), "friction": round(p.friction, 5)})
+
+    def summary(self) -> dict[str, Any]:
+        """Beliefs after the prior and after each fit (for the record)."""
+        return {"beliefs": self.history}
+
+
+@METHODS.register("mppi-sysid", "system C: expert staged costs, planning world from a wrong prior (sysid.prior_*), "
+                                "corrected by system identification after each failed attempt", tags=TAGS)
+def make_mppi_sysid(ctx: Any) -> MPPISysId:
+    _check(ctx, "mppi-sysid")
+    return MPPISysId(ctx)

@@ -101,7 +101,10 @@ class SysIdSection(StrictModel):
     """The planning world starts at this multiple of the objects' NOMINAL masses (never the truth)."""
     prior_friction_scale: float = Field(1.8, gt=0)
     max_attempts: int = Field(4, ge=1)
-    """Attempts per trial; system identification runs after each failed one."""
+    """Attempts per trial; system identification runs after each failed one (the scene is reset between)."""
+    mass_bounds_kg: Range = (0.02, 5.0)
+    """Where the fit searches the object's mass."""
+    friction_bounds: Range = (0.05, 1.5)
 
 
 class CameraSection(StrictModel):
@@ -175,6 +178,11 @@ class ClutterSection(StrictModel):
     goal_tol_m: float = Field(0.03, gt=0)
 
 
+class ClutterScoring(StrictModel):
+    max_disturb_m: float = Field(0.03, gt=0)
+    """No distractor may end farther than this from where it started."""
+
+
 class FlipScoring(StrictModel):
     flip_deg: float = Field(70.0, gt=0, lt=180)
     """Success: the box's up axis turned at least this far, and the box at rest on a face."""
@@ -213,7 +221,7 @@ class PickClutterConfig(ContactConfig):
                                  friction=(0.3, 0.7), x_m=(0.05, 0.12), y_m=(-0.12, -0.04), yaw_deg=(-20, 20),
                                  rgba=(0.15, 0.6, 0.25, 1.0))
     clutter: ClutterSection = ClutterSection()
-    scoring: PickScoring = PickScoring()
+    scoring: ClutterScoring = ClutterScoring()
     control: ControlSection = ControlSection(episode_s=12.0)
 
 

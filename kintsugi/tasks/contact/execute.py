@@ -101,6 +101,10 @@ class StagedPlanner:
     def _enter(self, stage: Stage, obs: Observation, log: TrialLog) -> None:
         self._stage = stage
         self.mppi.pin(GRIP, stage.grip)
+        self.mppi.set_noise_scale(stage.noise_scale)
+        if self.mppi.nominal is not None:
+            for i, v in stage.seed_plan.items():
+                self.mppi.hold(i, v)
         log.status(stage.name)
         log.event(obs.t, "stage", f"{stage.name} {_fmt(stage.goal)}")
 

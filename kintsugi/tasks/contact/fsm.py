@@ -38,6 +38,10 @@ class Stage:
     """Eq. 5's reactive correction at the inner rate while this stage runs."""
     attractors: tuple[Attractor, ...] = ()
     """Contact regions this stage's cost attracts the TCP to (also drawn in videos)."""
+    seed_plan: dict[int, float] = field(default_factory=dict)
+    """Actuator index -> a command the plan restarts from when the stage begins (see MPPI.hold)."""
+    noise_scale: float = 1.0
+    """Multiplies MPPI's sampling noise while this stage runs (fine force regulation wants less)."""
     goal: dict[str, float] = field(default_factory=dict)
     """A few numbers describing the stage's target, for the trial record."""
 

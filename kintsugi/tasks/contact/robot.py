@@ -64,24 +64,15 @@ def pose_tracker(world: EvaluationWorld) -> dict[str, TrackedObject]:
 
 @dataclass
 class ExecutionLog:
-    """One attempt as the robot recorded it, at the inner control rate: what system identification gets."""
+    """One attempt as the robot recorded it at the inner control rate: the observation before each
+    command and the command sent (what system identification gets; no ground truth in it)."""
 
-    start: Observation | None = None
-    t: list[float] = field(default_factory=list)
+    obs: list[Observation] = field(default_factory=list)
     ctrl: list[np.ndarray] = field(default_factory=list)
-    ee: list[np.ndarray] = field(default_factory=list)
-    force: list[np.ndarray] = field(default_factory=list)
-    objects: dict[str, list[np.ndarray]] = field(default_factory=dict)
 
     def add(self, obs: Observation, ctrl: np.ndarray) -> None:
-        if self.start is None:
-            self.start = obs
-        self.t.append(obs.t)
+        self.obs.append(obs)
         self.ctrl.append(ctrl.copy())
-        self.ee.append(obs.ee.copy())
-        self.force.append(obs.force.copy())
-        for k, o in obs.objects.items():
-            self.objects.setdefault(k, []).append(np.concatenate([o.pos, o.quat]))
 
 
 Feedback = Callable[[Observation, np.ndarray], np.ndarray]

@@ -186,6 +186,13 @@ class EvaluationWorld(ContactWorld):
 
     def pinched(self, name: str) -> bool:
         """Ground truth: both finger pads touch the object."""
+        return len(self._pads_on(name)) == 2
+
+    def touching_pads(self, name: str) -> bool:
+        """Ground truth: at least one finger pad touches the object."""
+        return bool(self._pads_on(name))
+
+    def _pads_on(self, name: str) -> set[int]:
         lay, m, d = self.layout, self.model, self.data
         geoms = set(lay.obj_geoms[name].tolist())
         fingers = [resolve(m, mujoco.mjtObj.mjOBJ_GEOM, f) for f in FINGERS]
@@ -195,7 +202,7 @@ class EvaluationWorld(ContactWorld):
             for f in fingers:
                 if (g1 == f and g2 in geoms) or (g2 == f and g1 in geoms):
                     seen.add(f)
-        return len(seen) == 2
+        return seen
 
     def object_pose(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         a = self.layout.obj_qpos[name]

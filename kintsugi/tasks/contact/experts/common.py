@@ -11,6 +11,7 @@ from typing import Callable
 
 import numpy as np
 
+from kintsugi.errors import ConfigError
 from kintsugi.tasks.contact.context import ContactContext
 from kintsugi.tasks.contact.costs import View, norm, smoothness, total, yaw_error
 from kintsugi.tasks.contact.fsm import Stage, StageFactory
@@ -21,19 +22,27 @@ from kintsugi.tasks.contact.world import angle_wrap, yaw_of
 W_SMOOTH = 50.0
 
 
-def grasp_yaw(geo: Geometry, quat: np.ndarray, current: float, max_open: float) -> tuple[float, float]:
+def grasp_yaw(geo: Geometry, quat: np.ndarray, current: float, max_open: float,
+              pos: np.ndarray | None = None, avoid: list[np.ndarray] | None = None) -> tuple[float, float]:
     """(hand yaw, width across the pinch) to pinch a lying box across a horizontal side that fits
-    the gripper, the one needing the least turn from `current`. Yaw is defined modulo pi."""
+    the gripper. Yaw is defined modulo pi. With `avoid` (other objects' positions), the side whose
+    open fingers come down farthest from them wins; otherwise the one needing the least turn."""
     half = geo.parts[0].half
     obj_yaw = float(yaw_of(quat))
     options = []
     for width, yaw in ((2 * half[1], obj_yaw), (2 * half[0], obj_yaw + math.pi / 2)):
         if width < max_open - 0.015:
             turn = float(yaw_error(np.array(current), yaw))
-            options.append((abs(turn), current - turn, width))
+            clearance = 0.0
+            if avoid and pos is not None:
+                across = np.array([-math.sin(yaw), math.cos(yaw)])
+                reach = width / 2 + 0.03
+                fingers = [pos[:2] + s * reach * across for s in (-1, 1)]
+                clearance = min(float(np.linalg.norm(f - a[:2])) for f in fingers for a in avoid)
+            options.append((-round(clearance, 3), abs(turn), current - turn, width))
     if not options:
-        raise ValueError("no side of the box fits the gripper")
-    _, yaw, width = min(options)
+        raise ConfigError("no side of the box fits the gripper; raise effector.max_opening_m")
+    _, _, yaw, width = min(options)
     return float(angle_wrap(yaw)), width
 
 

@@ -36,7 +36,8 @@ def pick_stages(ctx: ContactContext, obj: str) -> list[StageFactory]:
 
     def reach(obs: Observation) -> Stage:
         o = obs.objects[obj]
-        yaw, width = grasp_yaw(geo, o.quat, float(obs.ee[3]), opening)
+        others = [b.pos for k, b in obs.objects.items() if k != obj]
+        yaw, width = grasp_yaw(geo, o.quat, float(obs.ee[3]), opening, o.pos, others)
         plan.update(yaw=yaw, open=min(opening, width + 0.035))
 
         def cost(v: View) -> np.ndarray:

@@ -1,0 +1,91 @@
+"""System identification of an object's mass and friction from the robot's own log of an attempt.
+
+The log (observations + commands at the inner rate) is cut into short windows where the
+object moved or the wrist felt a force. Each window is replayed open-loop in planning-model
+variants from the state the robot observed at its start (proprioception + tracked pose and
+velocity), and compared with what the tracker and the F/T sensor saw next (multiple
+shooting: short windows keep contact-rich replays from drifting apart). The fit itself is
+`kintsugi.control.sysid.fit` (batched grids, then Nelder-Mead). Ground truth never enters.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from kintsugi.control.rollout import get_state
+from kintsugi.control.sysid import ExecutionLog as ReplayLog
+from kintsugi.control.sysid import ParamSpec, Signal, SysIdConfig, SysIdProblem, SysIdResult, fit
+from kintsugi.errors import ConfigError
+from kintsugi.tasks.contact.objects import Physics
+from kintsugi.tasks.contact.robot import ExecutionLog, Observation
+from kintsugi.tasks.contact.world import PlanningWorld
+
+WINDOW_TICKS = 30
+MAX_WINDOWS = 24
+MOVING_M_S = 0.01
+FORCE_N = 0.5
+
+
+def raw_ft(obs: Observation, hand_weight_n: float) -> np.ndarray:
+    """Undo the robot's taring: the F/T reading in the hand frame, as the planning model's sensor gives it."""
+    f = obs.force + np.array([0.0, 0.0, hand_weight_n])
+    c, s = np.cos(obs.ee[3]), np.sin(obs.ee[3])
+    return np.array([c * f[0] + s * f[1], -s * f[0] + c * f[1], f[2]])
+
+
+def windows(planning: PlanningWorld, log: ExecutionLog, obj: str, ticks: int = WINDOW_TICKS) -> list[ReplayLog]:
+    """Informative windows of one attempt as replay logs (states are planning-model states)."""
+    n = len(log.obs) - 1
+    out: list[ReplayLog] = []
+    hw = planning.layout.hand_weight_n
+    dt = float(np.median(np.diff([o.t for o in log.obs]))) if n > 1 else 0.0
+    for i in range(0, n - ticks + 1, ticks):
+        seg = log.obs[i:i + ticks + 1]
+        moving = max(np.linalg.norm(o.objects[obj].lin_vel) for o in seg) > MOVING_M_S
+        pressed = max(np.linalg.norm(o.force) for o in seg) > FORCE_N
+        if not (moving or pressed):
+            continue
+        start = seg[0]
+        data = planning.sync(start.ee, start.ee_vel, start.fingers, start.finger_vel,
+                             {k: (o.pos, o.quat, o.lin_vel, o.ang_vel) for k, o in start.objects.items()},
+                             start.ctrl, start.t)
+        out.append(ReplayLog(
+            initial_state=get_state(planning.model, data), controls=np.array(log.ctrl[i:i + ticks]),
+            observed={f"{obj}_pos": np.array([o.objects[obj].pos for o in seg[1:]]),
+                      "ft_force": np.array([raw_ft(o, hw) for o in seg[1:]])},
+            dt=dt))
+    if len(out) > MAX_WINDOWS:  # evenly thinned: bounded cost, whole attempt still covered
+        keep = np.linspace(0, len(out) - 1, MAX_WINDOWS).round().astype(int)
+        out = [out[k] for k in keep]
+    return out
+
+
+class BeliefFitter:
+    """Collects windows over attempts and refits one object's mass and friction against the table."""
+
+    def __init__(self, planning: PlanningWorld, obj: str, mass_bounds: tuple[float, float],
+                 friction_bounds: tuple[float, float], cfg: SysIdConfig | None = None) -> None:
+        geoms = planning.layout.obj_geoms[obj]
+        import mujoco
+
+        self.geom = mujoco.mj_id2name(planning.model, mujoco.mjtObj.mjOBJ_GEOM, int(geoms[0]))
+        self.planning, self.obj = planning, obj
+        self.params = [ParamSpec(kind="mass", name=obj, bounds=mass_bounds),
+                       ParamSpec(kind="friction", name=self.geom, bounds=friction_bounds, against="table")]
+        self.signals = [Signal(sensor=f"{obj}_pos", scale=0.005), Signal(sensor="ft_force", scale=1.0)]
+        self.cfg = cfg or SysIdConfig(grid=9, zoom_rounds=2, max_evals=40)
+        self.logs: list[ReplayLog] = []
+
+    def add(self, log: ExecutionLog) -> int:
+        new = windows(self.planning, log, self.obj)
+        self.logs += new
+        return len(new)
+
+    def fit(self) -> tuple[Physics, SysIdResult]:
+        """Fit on every window so far and write the beliefs into the planning world (all the object's geoms)."""
+        if not self.logs:
+            raise ConfigError(f"no informative window in the log: {self.obj!r} never moved and nothing was felt")
+        result = fit(SysIdProblem(self.planning.model, self.params, self.signals, self.logs, self.cfg))
+        phys = Physics(mass_kg=result.params[f"mass:{self.obj}"], friction=result.params[f"friction:{self.geom}"])
+        self.planning.set_beliefs({self.obj: phys})
+        return phys, result
