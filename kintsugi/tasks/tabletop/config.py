@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from kintsugi.config import Range, StrictModel
 
@@ -109,13 +109,19 @@ class Region(StrictModel):
     half_m: tuple[float, float] = Field((0.04, 0.04), description="half-extents along x and y")
     relative_to: str | None = None
 
-    @model_validator(mode="after")
-    def _positive(self) -> Region:
-        if min(self.half_m) <= 0:
-            raise ValueError(f"half_m {self.half_m} must be positive")
-        if self.relative_to is not None and self.relative_to not in OBJECT_KINDS:
-            raise ValueError(f"relative_to {self.relative_to!r} is not an object; known: {', '.join(OBJECT_KINDS)}")
-        return self
+    @field_validator("half_m")
+    @classmethod
+    def _positive(cls, v: tuple[float, float]) -> tuple[float, float]:
+        if min(v) <= 0:
+            raise ValueError(f"half-extents {v} must be positive")
+        return v
+
+    @field_validator("relative_to")
+    @classmethod
+    def _an_object(cls, v: str | None) -> str | None:
+        if v is not None and v not in OBJECT_KINDS:
+            raise ValueError(f"{v!r} is not an object; known: {', '.join(OBJECT_KINDS)}")
+        return v
 
 
 class TableSection(StrictModel):

@@ -1,0 +1,92 @@
+"""The shift and knock disturbances act on the physics: the target really slides by the drawn
+distance, a knocked bottle or capsule really falls, and neither touches what a gripper holds."""
+
+from __future__ import annotations
+
+import kintsugi  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
+import numpy as np
+import pytest
+
+from kintsugi.tasks.tabletop.config import TabletopConfig
+from kintsugi.tasks.tabletop.disturbances import Disturbances, KnockDisturbance, ShiftDisturbance
+from kintsugi.tasks.tabletop.robot import TabletopRobot
+from kintsugi.tasks.tabletop.world import StartPose, TabletopWorld
+
+LAYOUT = {"bottle": StartPose(x=0.40, y=-0.25), "cup": StartPose(x=0.46, y=0.0),
+          "capsule": StartPose(x=0.38, y=0.22)}
+
+
+def _world(objects: tuple[str, ...]) -> TabletopWorld:
+    return TabletopWorld(TabletopConfig(), objects, {k: LAYOUT[k] for k in objects})
+
+
+def _settle(world: TabletopWorld, seconds: float) -> None:
+    for _ in range(round(seconds / world.cfg.sim.control_dt_s)):
+        world.tick()
+
+
+def _no_warnings(world: TabletopWorld) -> None:
+    assert not any(w.number for w in world.data.warning)
+    assert np.isfinite(world.data.qpos).all()
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_shift_slides_the_cup_by_the_drawn_distance(seed: int) -> None:
+    world = _world(("bottle", "cup"))
+    shift = ShiftDisturbance(world, "cup", (0, 0), world.cfg.disturbance, seed)
+    world.watchers.append(shift)
+    start = world.ground_truth().objects["cup"].pos
+    shift.begin_action(1.0, ("right",))
+    _settle(world, 1.5)
+    end = world.ground_truth().objects["cup"]
+    moved = float(np.hypot(end.pos[0] - start[0], end.pos[1] - start[1]))
+    lo, hi = world.cfg.disturbance.shift_m
+    assert lo <= shift.distance <= hi
+    assert moved == pytest.approx(shift.distance, abs=0.004)
+    assert end.tilt_deg < 2.0 and end.speed_m_s < 0.01  # slid, not tipped or flung
+    assert shift.events and "cup slid" in shift.events[0][1]
+    _no_warnings(world)
+    world.close()
+
+
+@pytest.mark.parametrize(("obj", "others"), [("bottle", ("cup",)), ("capsule", ())])
+def test_knock_tips_a_standing_object_over(obj: str, others: tuple[str, ...]) -> None:
+    world = _world((obj, *others))
+    knock = KnockDisturbance(world, obj, (0, 0), world.cfg.disturbance, seed=4)
+    world.watchers.append(knock)
+    assert world.ground_truth().objects[obj].tilt_deg < 1.0
+    knock.begin_action(0.5, ("right",))
+    _settle(world, 2.0)
+    fallen = world.ground_truth().objects[obj]
+    assert fallen.tilt_deg > 60.0, fallen
+    assert fallen.speed_m_s < 0.05
+    assert knock.events and "knocked" in knock.events[0][1]
+    assert not world.data.xfrc_applied.any()  # the push ended
+    _no_warnings(world)
+    world.close()
+
+
+def test_a_knock_never_acts_on_a_held_object() -> None:
+    world = _world(("bottle",))
+    knock = KnockDisturbance(world, "bottle", (1, 1), world.cfg.disturbance, seed=0)  # during the 2nd action
+    hook = Disturbances([knock])
+    world.watchers.append(hook)
+    robot = TabletopRobot(world, hook=hook)
+    robot.execute({"action": "grasp", "arm": "right", "obj": "bottle"})
+    robot.execute({"action": "move_by_offset", "arm": "right", "dxyz": (0.0, 0.0, 0.1)})
+    assert knock.fired and "skipped" in hook.events[0][1]
+    truth = world.ground_truth()
+    assert truth.held["right"] == ["bottle"] and truth.objects["bottle"].tilt_deg < 5.0
+    world.close()
+
+
+def test_disturbance_draws_do_not_depend_on_the_other_disturbances() -> None:
+    # Paired trials: the shift of seed s is the same whether or not a knock or a drop also runs.
+    world = _world(("bottle", "cup"))
+    a = ShiftDisturbance(world, "cup", (0, 2), world.cfg.disturbance, seed=9)
+    KnockDisturbance(world, "bottle", (0, 0), world.cfg.disturbance, seed=9)
+    b = ShiftDisturbance(world, "cup", (0, 2), world.cfg.disturbance, seed=9)
+    c = ShiftDisturbance(world, "cup", (0, 2), world.cfg.disturbance, seed=10)
+    assert a.distance == b.distance and a._fire_in == b._fire_in
+    assert a.distance != c.distance
+    world.close()
