@@ -87,7 +87,7 @@ def test_arranger_adds_forward_branches_from_its_knowledge_base() -> None:
     while result.graph.node(chain[-1].target).kind == "recovery":
         chain.append(next(x for x in result.graph.edges if x.source == chain[-1].target))
     assert [x.actions[0].name for x in chain] == ["grasp", "move_by_offset", "move_to_obj", "rotate_eef"]
-    assert pour_drop.check.kind == "not_grasped" and pour_drop.window == 3
+    assert pour_drop.check.kind == "touching" and pour_drop.window == 3
 
 
 def test_arranger_needs_the_composers_facts() -> None:

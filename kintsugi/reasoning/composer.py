@@ -21,6 +21,8 @@ from kintsugi.taskgraph.vocabulary import Vocabulary
 
 ON_TABLE_Z_M = 0.03
 """An object whose lowest point is this close to the table top stands on it."""
+UPRIGHT_HEIGHT_RATIO = 0.6
+"""Undecided uprightness: a standing cup is ~0.7 as tall as its largest extent, a fallen bottle ~0.3."""
 LIFTED_Z_M = 0.05
 """A held object whose lowest point is this high is clear of the table."""
 _FN = re.compile(r"^\$(x|y|z|mirror)\(\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*(?:,\s*(-?[0-9.eE+-]+)\s*)?\)$")
@@ -41,7 +43,7 @@ def observed_facts(request: Any, domain: Domain) -> State:
     for o in request.objects:
         if not o.visible:
             continue
-        if "upright" in known and o.upright:
+        if "upright" in known and looks_upright(o):
             facts.add(("upright", o.name))
         if "on_table" in known and o.bottom_z is not None and o.bottom_z < ON_TABLE_Z_M and o.name not in held:
             facts.add(("on_table", o.name))
@@ -50,6 +52,16 @@ def observed_facts(request: Any, domain: Domain) -> State:
         if "released" in known and o.name not in held:
             facts.add(("released", o.name))
     return frozenset(facts)
+
+
+def looks_upright(o: SeenObject) -> bool:
+    """Perception's uprightness; when it could not decide (no well-defined axis), an object at least as tall
+    as it is long stands upright."""
+    if o.upright is not None:
+        return o.upright
+    if o.top_z is None or o.bottom_z is None or o.extent is None:
+        return False
+    return o.top_z - o.bottom_z >= UPRIGHT_HEIGHT_RATIO * max(o.extent)
 
 
 def arms_named(task: str, arms: list[str]) -> list[str]:
@@ -110,8 +122,9 @@ def edge_actions(op: GroundOp, seen: dict[str, SeenObject]) -> list:
 
 
 def build_graph(task: str, domain: Domain, initial: State, steps: list[GroundOp],
-                seen: dict[str, SeenObject]) -> ComposerReply:
-    """A chain graph start -> s1 -> ... -> goal from a plan, with the symbolic state of every node."""
+                seen: dict[str, SeenObject], goal: frozenset[Atom] = frozenset()) -> ComposerReply:
+    """A chain graph start -> s1 -> ... -> goal from a plan, with the symbolic state of every node. The goal
+    node checks every goal fact (not only the last step's), so the verdict covers the whole task."""
     if not steps:
         raise PlanningError("the goal already holds in the observed scene; there is nothing to do")
     nodes = [{"id": "start", "description": "the observed scene"}]
@@ -122,6 +135,8 @@ def build_graph(task: str, domain: Domain, initial: State, steps: list[GroundOp]
     for i, op in enumerate(steps, 1):
         after = op.apply(state)
         made = sorted(after - state)
+        if i == len(steps):
+            made = sorted(set(made) | set(goal))
         constraints, gripper = node_constraints(domain, made, seen)
         nid, eid = f"s{i}_{op.name}", f"e{i}_{op.name}"
         nodes.append({"id": nid, "description": ", ".join(atom_text(a) for a in made) or op.label,
@@ -150,7 +165,7 @@ def embedded_compose(request: ComposerRequest) -> ComposerReply:
     initial = observed_facts(request, domain)
     goal = parse_literals(list(request.goal), domain, where="task goal")
     steps = plan(initial, goal, ground(domain, arms, [o.name for o in request.objects if o.visible]))
-    return build_graph(request.task, domain, initial, steps, seen)
+    return build_graph(request.task, domain, initial, steps, seen, goal[0])
 
 
 def check_composition(reply: ComposerReply, vocabulary: Vocabulary) -> TaskGraph:

@@ -4,6 +4,7 @@
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Any, Iterable
 
 from kintsugi.reasoning.taskgraph_types import SeenArm, SeenObject
@@ -35,8 +36,23 @@ def arm_features(arm: Any) -> ArmState:
                     touching=frozenset(k for k, n in arm.touching.items() if n >= 1))
 
 
+@dataclass(frozen=True, slots=True)
+class AxisFree:
+    """A perceived object whose principal axis perception could not define (e.g. a raw, unfitted cloud):
+    axis-based checks (upright, tilted) read it as undecided (NaN), not as a measurement."""
+
+    centroid: Any
+    n_points: int
+    extremes: Any
+    axis: None = None
+
+
+def monitored(f: Any) -> Any:
+    return AxisFree(f.centroid, f.n_points, f.extremes) if f.upright is None else f
+
+
 def features(robot: Any, objects: Iterable[str] | None = None, cached: dict[str, Any] | None = None) -> Features:
     """The feature vector now: objects perceived (or `cached` when perception is not re-run this step)."""
     objs = cached if cached is not None else robot.features(objects)
-    visible = {k: f for k, f in objs.items() if f.visible and f.centroid is not None}
+    visible = {k: monitored(f) for k, f in objs.items() if f.visible and f.centroid is not None}
     return Features(objects=visible, arms={a: arm_features(robot.arm_state(a)) for a in ARMS})

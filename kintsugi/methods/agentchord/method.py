@@ -1,0 +1,142 @@
+"""The `agentchord` method (system B): compile once (composer, arranger, Eq. 8, keyframes), then conduct
+with no reasoning calls at run time.
+
+Per-trial figures the issue names (episode_steps, modelled_execution_time_s, runtime_reasoning_calls,
+recovery_latency_steps) go in one `metrics` event as JSON, deterministic so equal seeds give equal records:
+a method cannot reach the record's `details` (the task's scorer fills it). `metrics_of(record)` adds the
+measured execution_time_s (sim time + the record's reasoning latency).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from typing import Any
+
+import numpy as np
+
+from kintsugi.config import StrictModel
+from kintsugi.errors import ConfigError, KintsugiError
+from kintsugi.methods import METHODS
+from kintsugi.methods.agentchord.compile import compile_graph
+from kintsugi.methods.agentchord.conductor import Conductor, ConductorConfig
+from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes  # noqa: F401
+from kintsugi.trial import TrialLog
+
+LATENCY_MODEL_S = 5.0
+"""Stated per-call latency of a remote model, for the modelled execution time (the issue's default)."""
+
+
+class RunFigures(StrictModel):
+    """The `metrics` event of an agentchord trial: only deterministic figures (equal seeds, equal records)."""
+
+    episode_steps: int
+    """Control steps spent in atomic actions (the paper's episode steps)."""
+    modelled_execution_time_s: float
+    """Sim time + reasoning calls x `latency_model_s` (a stated model of a remote endpoint, not measured)."""
+    latency_model_s: float
+    planning_reasoning_calls: int
+    runtime_reasoning_calls: int
+    """Calls after the initial planning (AgentChord: none by design; counted, not assumed)."""
+    recovery_latency_steps: list[int]
+    """Per recovery: control steps from the monitor's firing to the recovery's first command."""
+    recoveries: int
+    actions: int
+    graph_nodes: int
+    graph_edges: int
+    monitors: int
+
+
+class AgentChordMetrics(RunFigures):
+    """The issue's per-trial figures: the event's, plus the measured execution time from the record."""
+
+    execution_time_s: float
+    """Sim time + measured reasoning time (every call, planning included)."""
+
+
+class AgentChord:
+    def __init__(self, ctx: Any, config: ConductorConfig = ConductorConfig()) -> None:
+        self.ctx = ctx
+        self.config = config
+
+    def run(self, robot: Any, log: TrialLog) -> bool:
+        from kintsugi.reasoning import make_reasoner
+        from kintsugi.reasoning.base import RecordingReasoner
+
+        reasoner = RecordingReasoner(make_reasoner(self.ctx.reasoner), records=[])
+        cfg = self.ctx.cfg
+        steps_per_tick = max(1, round(cfg.sim.control_dt_s / cfg.sim.timestep_s))
+        try:
+            first = robot.observation(images=self.ctx.reasoner.backend != "embedded")
+            compiled = compile_graph(reasoner, self.ctx.task, first)
+            planning_calls = len(reasoner.records)
+            keyframes = TabletopKeyframes(cfg)
+            t0 = time.perf_counter()
+            compiled_kf = self._compile_keyframes(compiled, keyframes, first)
+            compiled.timings_s["keyframes"] = time.perf_counter() - t0
+            g = compiled.graph
+            log.event(robot.sim_time, "compiled", f"{len(g.nodes)} nodes, {len(g.edges)} edges, "
+                      f"{len(g.monitors())} monitors, {len(compiled.result.kept)} recovery branches kept "
+                      f"({len(compiled.result.rejected)} dropped by Eq. 8)")
+            conductor = Conductor(g, robot, keyframes, log, steps_per_tick, compiled_kf, self.config)
+            try:
+                ok = conductor.run()
+            finally:
+                m = conductor.metrics
+                runtime_calls = len(reasoner.records) - planning_calls
+                metrics = RunFigures(
+                    episode_steps=m.episode_steps,
+                    modelled_execution_time_s=round(robot.sim_time + len(reasoner.records) * LATENCY_MODEL_S, 4),
+                    latency_model_s=LATENCY_MODEL_S, planning_reasoning_calls=planning_calls,
+                    runtime_reasoning_calls=runtime_calls, recovery_latency_steps=m.recovery_latency_steps,
+                    recoveries=m.recoveries, actions=m.actions,
+                    graph_nodes=len(g.nodes), graph_edges=len(g.edges), monitors=len(g.monitors()))
+                log.event(robot.sim_time, "metrics", metrics.model_dump_json())
+            return ok
+        finally:
+            log.transcript.extend(r.model_dump(mode="json") for r in reasoner.records)
+
+    @staticmethod
+    def _compile_keyframes(compiled: Any, keyframes: TabletopKeyframes, first: Any) -> dict:
+        """Keyframes of the nominal free moves from the first observation, a held object (by the composer's
+        node facts) predicted at the grasp point, where a side grasp closes; an infeasible keyframe fails the
+        trial before anything moves, with the solver's message."""
+        from kintsugi.reasoning.taskgraph_types import parse_atom
+
+        out = {}
+        graph = compiled.graph
+        for e in graph.edges:
+            if e.kind != "nominal" or len(e.actions) != 1 or e.actions[0].name != "move_to_obj":
+                continue
+            arm = e.actions[0].args["arm"]
+            held = {}
+            for text in compiled.composer.node_facts.get(e.source, []):
+                positive, name, args = parse_atom(text)
+                if positive and name == "holding" and args[0] == arm:
+                    held[args[1]] = np.zeros(3)
+            kf, _ = keyframes.move_target(e, graph.node(e.target), first.objects, held, first.arms[arm])
+            out[e.id] = kf.x
+        return out
+
+
+def metrics_of(record: Any) -> AgentChordMetrics | None:
+    """The issue's figures of an agentchord trial record (None if it has no metrics event)."""
+    for e in record.events:
+        if e.kind == "metrics":
+            return AgentChordMetrics(**json.loads(e.detail),
+                                     execution_time_s=round(record.sim_time + record.reasoning_latency_s, 4))
+    return None
+
+
+@METHODS.register("agentchord", "AgentChord: composer + arranger compile a recovery-augmented task graph once; "
+                  "the conductor runs it with monitors and pre-compiled forward recovery, no run-time reasoning",
+                  tags=("system-b",))
+def make_agentchord(ctx: Any) -> AgentChord:
+    from kintsugi.tasks.tabletop.context import TabletopContext
+
+    if not isinstance(ctx, TabletopContext):
+        raise ConfigError("method 'agentchord' runs the tabletop tasks (system B) only")
+    return AgentChord(ctx)
+
+
+__all__ = ["AgentChord", "AgentChordMetrics", "KeyframeError", "KintsugiError", "metrics_of"]

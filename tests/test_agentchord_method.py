@@ -1,0 +1,49 @@
+"""The agentchord method on pour-single through run_trial: compiled once (two planning calls, recorded), run
+with no reasoning calls; a drop fires the carry edge's monitor and the pre-compiled forward branch re-grasps
+and rejoins at the failed edge's target; an infeasible keyframe is a recorded failure with the solver's words."""
+
+from __future__ import annotations
+
+import pytest
+
+from kintsugi.methods.agentchord.method import metrics_of
+from kintsugi.trial import TrialSpec, run_trial
+
+
+def _trial(condition: str, seed: int, **overrides):
+    return run_trial(TrialSpec(task="pour-single", method="agentchord", variant="default", condition=condition,
+                               seed=seed, overrides=overrides))
+
+
+def test_nominal_pour_compiles_once_and_runs_without_reasoning() -> None:
+    r = _trial("none", 0)
+    assert r.error is None and r.success and r.framework_success
+    m = metrics_of(r)
+    assert m.planning_reasoning_calls == 2 and m.runtime_reasoning_calls == 0 and m.recoveries == 0
+    assert [c["role"] for c in r.transcript] == ["composer", "arranger"]
+    assert [s.skill for s in r.skills if s.skill != "open_gripper"] == ["grasp", "move_by_offset", "move_to_target",
+                                                                      "rotate_eef", "rotate_eef", "place"]
+    assert m.actions == len(r.skills) and 800 < m.episode_steps < 1500
+    assert m.execution_time_s >= r.sim_time and m.modelled_execution_time_s == pytest.approx(r.sim_time + 10.0, abs=1e-3)
+    assert m.monitors == 10 and m.graph_nodes == 23
+
+
+def test_a_drop_runs_the_precompiled_forward_recovery() -> None:
+    r = _trial("drop", 3, **{"disturbance.drop_p": 0.1})  # seed 3 drops the bottle at the end of the lift
+    assert any(e.kind == "disturbance" for e in r.events)
+    fired = [e.detail for e in r.events if e.kind == "monitor"]
+    assert fired and "drop" in fired[0] and "re.e2_lift.drop.right.1" in fired[0]
+    assert r.transitions == [("e2_lift", "re.e2_lift.drop.right.1")]
+    rec = [s.skill for s in r.skills if s.recovery]
+    assert rec[-2:] == ["grasp", "move_by_offset"] and set(rec[:-2]) <= {"open_gripper"}
+    m = metrics_of(r)
+    assert m.recoveries == 1 and m.recovery_latency_steps == [0] and m.runtime_reasoning_calls == 0
+    assert r.success and r.framework_success
+    again = _trial("drop", 3, **{"disturbance.drop_p": 0.1})
+    assert again.without_timings() == r.without_timings()
+
+
+def test_an_unreachable_keyframe_is_a_recorded_failure() -> None:
+    r = _trial("none", 0, **{"motion.workspace_z_m": [0.005, 0.12]})  # no pouring height is in the workspace
+    assert not r.success and not r.framework_success
+    assert r.error is not None and "no feasible keyframe" in r.error and "s3_carry_over" in r.error
