@@ -68,6 +68,8 @@ class Signal(StrictModel):
     sensor: str
     scale: float = Field(1.0, gt=0)
     weight: float = Field(1.0, ge=0)
+    bin: int = Field(1, ge=1)
+    """Compare means over bins of this many readings (contact spikes make single readings a rough loss)."""
 
 
 class SysIdConfig(StrictModel):
@@ -78,6 +80,9 @@ class SysIdConfig(StrictModel):
     max_cycles: int = Field(4, ge=1)
     converge_tol: float = Field(0.05, gt=0)  # stop when no parameter moved more than this (relative)
     nthread: int | None = Field(None, ge=1)
+    substeps: int = Field(1, ge=1)
+    """Physics steps per logged control step in replays: a log at a coarse control rate can be replayed
+    with a finer integration (each command held for `substeps` steps, sensors read at the log's rate)."""
 
 
 @dataclass
@@ -166,7 +171,8 @@ class _Replay:
             raise ConfigError(f"logs were sampled at different timesteps {sorted(dts)}; resample them to one")
         # replays step at the log's rate (a planner may use a coarser step; its contacts are cruder)
         self.model = copy.copy(problem.model)
-        self.model.opt.timestep = problem.logs[0].dt
+        self.substeps = problem.cfg.substeps
+        self.model.opt.timestep = problem.logs[0].dt / self.substeps
         self.engine = RolloutEngine(self.model, problem.cfg.nthread)
         self.scratch = mujoco.MjData(self.model)
         for i, log in enumerate(problem.logs):
@@ -201,12 +207,14 @@ class _Replay:
             L = len(logs)  # sample index = model * L + log
             states = np.repeat(np.stack([lg.initial_state for lg in logs])[None], G, axis=0).reshape(G * L, -1)
             controls = np.repeat(np.stack([lg.controls for lg in logs])[None], G, axis=0).reshape(G * L, *logs[0].controls.shape)
+            controls = np.repeat(controls, self.substeps, axis=1)
             batch = self.engine.run_state(states, controls, models=[m for m in models for _ in range(L)])
             self.rollouts += G * L
             part = np.zeros(G * L)
             for s in self.problem.signals:
                 obs = np.stack([lg.observed[s.sensor] for lg in logs])  # (L, N, dim)
-                resid = (batch.sensor(s.sensor).reshape(G, L, *obs.shape[1:]) - obs[None]) / s.scale
+                seen = batch.sensor(s.sensor)[:, self.substeps - 1::self.substeps].reshape(G, L, *obs.shape[1:])
+                resid = (_binned(seen, s.bin) - _binned(obs[None], s.bin)) / s.scale
                 with np.errstate(invalid="ignore"):
                     part += s.weight * np.nanmean(resid**2, axis=(2, 3)).reshape(G * L)
             part[~batch.valid] = np.inf
@@ -214,6 +222,16 @@ class _Replay:
         total /= len(self.problem.logs)
         total[~np.isfinite(total)] = np.inf
         return total
+
+
+def _binned(x: np.ndarray, size: int) -> np.ndarray:
+    """(..., N, dim) -> (..., N // size, dim) means (a trailing partial bin is dropped); NaN-aware."""
+    if size == 1:
+        return x
+    n = x.shape[-2] // size
+    with np.errstate(invalid="ignore"), __import__("warnings").catch_warnings():
+        __import__("warnings").simplefilter("ignore", RuntimeWarning)
+        return np.nanmean(x[..., : n * size, :].reshape(*x.shape[:-2], n, size, x.shape[-1]), axis=-2)
 
 
 def fit(problem: SysIdProblem) -> SysIdResult:

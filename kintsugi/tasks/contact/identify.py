@@ -65,6 +65,8 @@ class BeliefFitter:
 
     def __init__(self, planning: PlanningWorld, obj: str, mass_bounds: tuple[float, float],
                  friction_bounds: tuple[float, float], cfg: SysIdConfig | None = None) -> None:
+        """Replays integrate at the configured simulation timestep (`sim.timestep_s`, a setting the user
+        gave, not a hidden truth): the logged 10 ms commands are each held for several fine steps."""
         geoms = planning.layout.obj_geoms[obj]
         import mujoco
 
@@ -72,8 +74,10 @@ class BeliefFitter:
         self.planning, self.obj = planning, obj
         self.params = [ParamSpec(kind="mass", name=obj, bounds=mass_bounds),
                        ParamSpec(kind="friction", name=self.geom, bounds=friction_bounds, against="table")]
-        self.signals = [Signal(sensor=f"{obj}_pos", scale=0.005), Signal(sensor="ft_force", scale=1.0)]
-        self.cfg = cfg or SysIdConfig(grid=9, zoom_rounds=2, max_evals=40)
+        self.signals = [Signal(sensor=f"{obj}_pos", scale=0.005, bin=5), Signal(sensor="ft_force", scale=1.0, bin=5)]
+        sim = planning.cfg.sim
+        substeps = max(1, round(sim.planning_timestep_s / sim.timestep_s))
+        self.cfg = cfg or SysIdConfig(grid=9, zoom_rounds=2, max_evals=40, substeps=substeps)
         self.logs: list[ReplayLog] = []
 
     def add(self, log: ExecutionLog) -> int:

@@ -1,0 +1,85 @@
+"""Ground-truth scoring of the contact tasks on real physics, driven by plain servo commands (no planner)."""
+
+from __future__ import annotations
+
+import kintsugi  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
+import mujoco
+import numpy as np
+import pytest
+
+from kintsugi.tasks import TASKS, load_all
+from kintsugi.tasks.contact.robot import ContactRobot
+
+load_all()
+
+
+def _task(name: str, condition: str = "none", seed: int = 0, **over):  # noqa: ANN003, ANN202
+    task = TASKS.get(name).factory()
+    cfg = task.config(over)
+    world, scorer, setup = task.build(cfg, condition, seed)
+    return cfg, world, scorer, setup
+
+
+def _press(force_n: float, seconds: float):  # noqa: ANN202
+    """Push the box to the wall by hand-written servo targets, then hold a command worth `force_n`."""
+    cfg, world, scorer, setup = _task("push-force")
+    robot = ContactRobot(world, watchers=[scorer.watch])
+    box = robot.observe().objects["box"].pos
+    hx = setup.scene.geometry["box"].parts[0].half[0]
+    robot.act(np.array([box[0] - hx - 0.04, box[1], 0.05, 0, 0]), 0.8)
+    robot.act(np.array([box[0] - hx - 0.04, box[1], 0.008, 0, 0]), 0.5)
+    for x in np.linspace(box[0] - hx - 0.01, 0.13, 30):
+        robot.act(np.array([x, box[1], 0.008, 0, 0]), 0.05)
+    hand = robot.act(np.array([0.125, box[1], 0.008, 0, 0]), 0.5).ee[0]
+    robot.act(np.array([hand + force_n / cfg.effector.kp_n_per_m, box[1], 0.008, 0, 0]), seconds)
+    return scorer.finish(world)
+
+
+def test_push_force_counts_only_an_unbroken_stretch_in_the_band() -> None:
+    ok, details = _press(5.0, 2.6)
+    assert ok and details.longest_in_band_s >= 2.0 and abs(details.mean_force_n - 5.0) < 1.0
+    assert details.gap_to_wall_m < 0.003
+    ok, details = _press(5.0, 1.2)  # the right force, not long enough
+    assert not ok and 1.0 < details.longest_in_band_s < 2.0
+    ok, details = _press(12.0, 2.6)  # long enough, too hard
+    assert not ok and details.longest_in_band_s < 0.5 and details.max_force_n > 10
+
+
+def _teleport(world, name: str, xy: tuple[float, float]) -> None:  # noqa: ANN001
+    a = world.layout.obj_qpos[name]
+    world.data.qpos[a:a + 2] = xy
+    world.data.qvel[world.layout.obj_dof[name]:world.layout.obj_dof[name] + 6] = 0
+    mujoco.mj_forward(world.model, world.data)
+    world.step(200)
+
+
+def test_pick_clutter_wants_the_box_on_the_goal_and_the_clutter_undisturbed() -> None:
+    cfg, world, scorer, _ = _task("pick-clutter")
+    ok, details = scorer.finish(world)
+    assert not ok and details.goal_distance_m > 0.1
+    _teleport(world, "box", cfg.clutter.goal_m)
+    ok, details = scorer.finish(world)
+    assert ok, details
+    _teleport(world, "clutter_0", (-0.25, -0.2))  # shoved away
+    ok, details = scorer.finish(world)
+    assert not ok and details.max_disturb_m > cfg.scoring.max_disturb_m
+
+
+def test_clutter_sits_round_the_box_without_touching_it() -> None:
+    for seed in range(5):
+        _, world, _, setup = _task("pick-clutter", "random", seed)
+        world.step(100)
+        names = {mujoco.mj_id2name(world.model, mujoco.mjtObj.mjOBJ_GEOM, int(g)) for g in world.layout.obj_geoms["box"]}
+        for i in range(world.data.ncon):
+            c = world.data.contact[i]
+            pair = {mujoco.mj_id2name(world.model, mujoco.mjtObj.mjOBJ_GEOM, int(c.geom1)),
+                    mujoco.mj_id2name(world.model, mujoco.mjtObj.mjOBJ_GEOM, int(c.geom2))}
+            assert not (pair & names and any(p.startswith("clutter") for p in pair)), (seed, pair)
+        assert len(setup.scene.geometry) == 1 + TASKS.get("pick-clutter").factory().config({}).clutter.distractors
+
+
+@pytest.mark.parametrize("task", ["pick-box", "pick-clutter", "push-force"])
+def test_every_task_has_both_expert_designs(task: str) -> None:
+    from kintsugi.tasks.contact.experts import EXPERTS
+
+    assert task in EXPERTS

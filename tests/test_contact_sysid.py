@@ -1,0 +1,82 @@
+"""mppi-sysid's honesty and its identification on a task world, from the robot's own log only."""
+
+from __future__ import annotations
+
+import kintsugi  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
+import numpy as np
+import pytest
+
+import kintsugi.methods.builtin  # noqa: F401
+from kintsugi.control.sysid import SysIdConfig
+from kintsugi.methods.contact import MPPISysId
+from kintsugi.tasks import TASKS, load_all
+from kintsugi.tasks.contact.identify import BeliefFitter, raw_ft, windows
+from kintsugi.tasks.contact.robot import ContactRobot
+from kintsugi.tasks.contact.world import PlanningWorld, tared_force_world
+from kintsugi.trial import TrialSpec
+
+load_all()
+
+
+def _ctx(condition: str, seed: int, method: str = "mppi-sysid"):  # noqa: ANN202
+    task = TASKS.get("push-force").factory()
+    cfg = task.config({})
+    world, scorer, setup = task.build(cfg, condition, seed)
+    spec = TrialSpec(task="push-force", method=method, variant="default", condition=condition, seed=seed)
+    return task, cfg, world, setup, task.context(cfg, setup, False, spec)
+
+
+def test_the_prior_comes_from_the_catalogue_never_from_the_trial() -> None:
+    priors = []
+    for seed in (0, 1):
+        _, cfg, _, setup, ctx = _ctx("physics", seed)
+        assert ctx.oracle_physics is None
+        prior = MPPISysId(ctx).prior()["box"]
+        assert prior.mass_kg == pytest.approx(setup.nominal["box"].mass_kg * cfg.sysid.prior_mass_scale)
+        priors.append(prior)
+    assert priors[0] == priors[1]  # the truth differs between the seeds; the prior does not
+
+
+def _push_and_release(robot: ContactRobot, setup, speed: float) -> None:  # noqa: ANN001
+    """Scripted excitation: push the box at `speed`, stop, let it slide out (no planner involved)."""
+    box = robot.observe().objects["box"].pos
+    hx = setup.scene.geometry["box"].parts[0].half[0]
+    x0 = box[0] - hx - 0.012
+    robot.act(np.array([x0 - 0.02, box[1], 0.05, 0, 0]), 0.6)
+    robot.act(np.array([x0 - 0.02, box[1], 0.008, 0, 0]), 0.4)
+    robot.new_log()
+    for k in range(40):
+        robot.act(np.array([x0 + speed * 0.01 * k, box[1], 0.008, 0, 0]), 0.01)
+    robot.act(np.array([x0 + speed * 0.4 - 0.03, box[1], 0.008, 0, 0]), 0.6)
+
+
+def test_sysid_pulls_an_8x_1_8x_prior_toward_the_truth_from_the_robots_log() -> None:
+    _, cfg, world, setup, ctx = _ctx("physics", 3)
+    robot = ContactRobot(world)
+    planning = PlanningWorld(cfg, ctx.known, MPPISysId(ctx).prior())
+    fitter = BeliefFitter(planning, "box", cfg.sysid.mass_bounds_kg, cfg.sysid.friction_bounds,
+                          SysIdConfig(grid=9, zoom_rounds=2, max_evals=40, nthread=2, substeps=5))
+    _push_and_release(robot, setup, 0.35)
+    assert fitter.add(robot.new_log()) >= 2
+    phys, result = fitter.fit()
+    truth = setup.truth["box"]
+    assert result.loss < 0.2 * result.prior_loss
+    # a push pins the friction force (mu x m x g) well; mass and friction apart are seen only weakly
+    product = phys.friction * phys.mass_kg / (truth.friction * truth.mass_kg)
+    assert abs(product - 1) < 0.1, (phys, truth)
+    assert abs(phys.mass_kg / truth.mass_kg - 1) < 0.5, (phys, truth)  # from 8x
+    assert planning.physics_of("box").mass_kg == pytest.approx(phys.mass_kg)
+
+
+def test_windows_hold_what_the_robot_saw() -> None:
+    _, cfg, world, setup, ctx = _ctx("none", 0)
+    robot = ContactRobot(world)
+    planning = PlanningWorld(cfg, ctx.known, ctx.nominal)
+    _push_and_release(robot, setup, 0.3)
+    log = robot.new_log()
+    wins = windows(planning, log, "box")
+    assert wins and all(w.controls.shape == (30, 5) for w in wins)
+    # the replayed sensor is the raw F/T: re-taring it gives back what the robot read
+    obs = log.obs[5]
+    raw = raw_ft(obs, planning.layout.hand_weight_n)
+    assert np.allclose(tared_force_world(raw, obs.ee[3], planning.layout.hand_weight_n), obs.force)
