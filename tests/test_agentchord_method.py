@@ -47,3 +47,14 @@ def test_an_unreachable_keyframe_is_a_recorded_failure() -> None:
     r = _trial("none", 0, **{"motion.workspace_z_m": [0.005, 0.12]})  # no pouring height is in the workspace
     assert not r.success and not r.framework_success
     assert r.error is not None and "no feasible keyframe" in r.error and "s3_carry_over" in r.error
+
+
+@pytest.mark.parametrize("method, calls", [("agentchord-bt", 2), ("rekep", 1)])
+def test_backtracking_baselines_go_back_to_a_subgoal_that_holds(method: str, calls: int) -> None:
+    r = run_trial(TrialSpec(task="pour-single", method=method, variant="default", condition="drop", seed=3,
+                            overrides={"disturbance.drop_p": 0.1}))
+    assert r.transitions == [("e2_lift", "backtrack:start")]  # the bottle is down: only the start still holds
+    assert [e.detail for e in r.events if e.kind == "backtrack"] and r.success
+    m = metrics_of(r)
+    assert m.planning_reasoning_calls == calls == len(r.transcript) and m.runtime_reasoning_calls == 0
+    assert m.recoveries == 1 and not any(s.recovery for s in r.skills)  # re-runs nominal edges, no branch

@@ -17,7 +17,8 @@ from kintsugi.reasoning.arranger import ask_arrange
 from kintsugi.reasoning.composer import ask_compose
 from kintsugi.reasoning.symbolic import PlanningError
 from kintsugi.reasoning.taskgraph_types import ArrangerReply, ArrangerRequest, ComposerReply, ComposerRequest
-from kintsugi.taskgraph.forward import FilterResult
+from kintsugi.taskgraph.augment import RecoveryProposal, augment
+from kintsugi.taskgraph.forward import FilterResult, forward_filter
 from kintsugi.reasoning.validation import describe_validation_error
 from kintsugi.taskgraph.model import TaskGraph
 
@@ -36,9 +37,11 @@ class Compiled:
         return self.result.graph
 
 
-def compile_graph(reasoner: Any, spec: Any, observation: Any) -> Compiled:
+def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = True) -> Compiled:
     """spec: the task's TaskSpec (instruction, goal, objects); observation: the robot's first Observation.
-    Raises ReasoningError (recorded in the transcript when the reasoner records) when a role fails."""
+    Raises ReasoningError (recorded in the transcript when the reasoner records) when a role fails.
+    With `arranger=False` (ReKep-style) there is one planning call: the monitors are the nominal graph's own
+    constraints that must persist along each edge (detect-only), no recovery branches."""
     vocab = tabletop_vocabulary(spec.objects)
     objects, arms = seen_objects(observation.objects), seen_arms(observation.arms)
     t0 = time.perf_counter()
@@ -49,9 +52,43 @@ def compile_graph(reasoner: Any, spec: Any, observation: Any) -> Compiled:
         raise PlanningError(f"task {spec.name!r} cannot be composed: {describe_validation_error(exc)}") from None
     nominal, composed = ask_compose(reasoner, request, vocab)
     t1 = time.perf_counter()
+    if not arranger:
+        result = forward_filter(augment(nominal, persistent_monitors(nominal, composed)))
+        return Compiled(nominal, result, composed, ArrangerReply(proposals=[], reasoning="no arranger"),
+                        {"composer": t1 - t0, "arranger": 0.0})
     arrange = ArrangerRequest(task=spec.instruction, graph=composed.graph, node_facts=composed.node_facts,
                               edge_operators=composed.edge_operators, objects=objects, arms=arms,
                               domain=TABLETOP_DOMAIN, images_png=dict(observation.images_png))
     result, arranged = ask_arrange(reasoner, arrange, nominal, vocab)
     t2 = time.perf_counter()
     return Compiled(nominal, result, composed, arranged, {"composer": t1 - t0, "arranger": t2 - t1})
+
+
+def persistent_monitors(graph: TaskGraph, composed: ComposerReply) -> list[RecoveryProposal]:
+    """Detect-only monitors from the constraints of the facts about a held object that hold at both ends of
+    each nominal edge (holding it, keeping it upright or lifted while carrying): ReKep's path constraints,
+    compiled once."""
+    from kintsugi.methods.agentchord.domain import TABLETOP_DOMAIN
+    from kintsugi.reasoning.composer import node_constraints
+    from kintsugi.reasoning.symbolic import parse_literals
+
+    out = []
+    for e in graph.edges:
+        facts = [set(parse_literals(composed.node_facts.get(n, []), TABLETOP_DOMAIN, where="node facts")[0])
+                 for n in (e.source, e.target)]
+        kept = facts[0] & facts[1]
+        held = {a[2] for a in kept if a[0] == "holding"}
+        kept = sorted(a for a in kept if a[0] == "holding" or (a[0] in ("upright", "lifted") and a[1] in held))
+        constraints, _ = node_constraints(TABLETOP_DOMAIN, kept, {})
+        for i, c in enumerate(constraints):
+            margin = PATH_MARGIN_DEG if c["kind"] in ("upright", "tilted") else PATH_MARGIN_M
+            out.append(RecoveryProposal.model_validate({
+                "edge": e.id, "monitor": {"id": f"p.{e.id}.{i}", "failure_mode": f"path_{c['kind']}", "check": c,
+                                          "margin": margin, "window": 3,
+                                          "description": "path constraint on a held object (detect only)"}}))
+    return out
+
+
+PATH_MARGIN_M = 0.02
+PATH_MARGIN_DEG = 10.0
+"""Robustness margins (Eq. 12's epsilon) of the path monitors: perception noise is a few millimetres/degrees."""

@@ -15,11 +15,12 @@ control steps (shorter than one sample) is met by one violated sample.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
 from kintsugi.config import StrictModel
+from kintsugi.errors import KintsugiError
 from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes
 from kintsugi.methods.agentchord.observe import features
 from kintsugi.taskgraph.forward import cost_to_go, next_edge
@@ -33,10 +34,18 @@ SETTLE_M = 0.001
 SETTLE_TRIES = 25
 
 
+class ConductorError(KintsugiError):
+    """The conductor cannot go on (action budget spent, a recovery node with no way back)."""
+
+
 class ConductorConfig(StrictModel):
     max_actions: int = 80
     """Atomic actions per episode before the conductor gives up (a recovery loop never ends a trial hanging)."""
     max_recoveries: int = 6
+    """Recoveries (or backtracks) per episode before the conductor gives up."""
+    on_failure: Literal["branch", "backtrack"] = "branch"
+    """branch: the pre-compiled forward recovery (AgentChord); backtrack: back to the latest nominal node whose
+    sub-goal still holds and re-run the nominal edges from there (AC-BT, ReKep-style)."""
 
 
 @dataclass
@@ -86,15 +95,21 @@ class Conductor:
                 return False
             node = edge.target
             firing = self._run_edge(edge, with_monitors=True)
-            tries = 0
+            while firing is not None and self.config.on_failure == "backtrack":
+                self.metrics.recoveries += 1
+                if self.metrics.recoveries > self.config.max_recoveries:
+                    self.log.event(self.robot.sim_time, "gave up", f"{firing.failure_mode} on {edge.id} after "
+                                   f"{self.config.max_recoveries} backtracks")
+                    return False
+                node = self._backtrack(edge, firing)
+                firing = None
             while firing is not None:
                 if firing.recovery is None:
                     self.log.event(self.robot.sim_time, "unrecovered", f"{firing.failure_mode} on {edge.id}: "
                                    "the graph has no recovery branch for it")
                     return False
-                tries += 1
                 self.metrics.recoveries += 1
-                if tries > self.config.max_recoveries:
+                if self.metrics.recoveries > self.config.max_recoveries:
                     self.log.event(self.robot.sim_time, "gave up", f"{firing.failure_mode} on {edge.id} after "
                                    f"{self.config.max_recoveries} recoveries")
                     return False
@@ -119,6 +134,30 @@ class Conductor:
                     return firing
         return None
 
+    def _backtrack(self, failed: Edge, firing: Firing) -> str:
+        """The latest nominal node before the failed edge whose constraints hold now (the start always does)."""
+        self.metrics.recovery_latency_steps.append(0)
+        arms = [e for m in failed.monitors for e, role, _ in m.check.refs() if role == "arm"]
+        chain = self._nominal_path()
+        upto = chain[: chain.index(failed.source) + 1]
+        names = {e for n in upto for c in self.graph.node(n).constraints for e, role, _ in c.refs() if role != "arm"}
+        if arms:
+            self._wait_still(arms[0], names | _objects_of(failed), failed)
+        f = features(self.robot, names)
+        for n in reversed(upto):
+            if all(not c.evaluate(f) > 0.0 for c in self.graph.node(n).constraints):
+                self.log.event(self.robot.sim_time, "backtrack", f"{firing.failure_mode} on {failed.id}: back to {n!r}")
+                self.log.transition(failed.id, f"backtrack:{n}")
+                return n
+        return self.graph.start
+
+    def _nominal_path(self) -> list[str]:
+        out, node = [self.graph.start], self.graph.start
+        while node != self.graph.goal:
+            node = next_edge(self.graph, node, self.ctg).target
+            out.append(node)
+        return out
+
     def _recheck(self, edge: Edge) -> Firing | None:
         """After a recovery merged: the failed edge's monitors that need no edge-start reference, read once."""
         bound = [m.model_copy(update={"window": 1}) for m in edge.monitors if m.check.bound]
@@ -132,9 +171,11 @@ class Conductor:
     def _fired(self, edge: Edge, firing: Firing) -> None:
         t = self.robot.sim_time
         self.metrics.firings.append(f"{edge.id}:{firing.failure_mode}")
+        branch = self.config.on_failure == "branch"
+        then = f"recovery {firing.recovery or 'none'}" if branch else "backtrack"
         self.log.event(t, "monitor", f"{firing.monitor} ({firing.failure_mode}) fired on {edge.id} with value "
-                       f"{firing.value:.3g} -> recovery {firing.recovery or 'none'}")
-        if firing.recovery is not None:
+                       f"{firing.value:.3g} -> {then}")
+        if branch and firing.recovery is not None:
             self.log.transition(edge.id, firing.recovery)
 
     def _run_recovery(self, failed: Edge, firing: Firing) -> str:
@@ -149,7 +190,7 @@ class Conductor:
                 return edge.target
             nxt = next_edge(g, edge.target, self.ctg)
             if nxt is None:  # cannot happen on an Eq. 8-filtered graph: every recovery node merges
-                raise KeyframeError(f"recovery node {edge.target!r} has no way back into the graph")
+                raise ConductorError(f"recovery node {edge.target!r} has no way back into the graph")
             edge = nxt
 
     def _settle(self, failed: Edge, recovery: Edge) -> None:
@@ -176,7 +217,7 @@ class Conductor:
 
     def _execute(self, edge: Edge, name: str, args: dict) -> None:
         if self.metrics.actions >= self.config.max_actions:
-            raise KeyframeError(f"{self.config.max_actions} atomic actions spent without reaching the goal")
+            raise ConductorError(f"{self.config.max_actions} atomic actions spent without reaching the goal")
         call = {"action": name, **args}
         if name == "move_to_obj" and len(edge.actions) == 1:
             call = self._keyframe_call(edge, call)

@@ -55,9 +55,13 @@ class AgentChordMetrics(RunFigures):
 
 
 class AgentChord:
-    def __init__(self, ctx: Any, config: ConductorConfig = ConductorConfig()) -> None:
+    """`arranger=False` compiles monitors from the nominal graph's persistent constraints instead (ReKep-style);
+    `config.on_failure="backtrack"` backtracks instead of branching (AC-BT, ReKep-style)."""
+
+    def __init__(self, ctx: Any, config: ConductorConfig = ConductorConfig(), arranger: bool = True) -> None:
         self.ctx = ctx
         self.config = config
+        self.arranger = arranger
 
     def run(self, robot: Any, log: TrialLog) -> bool:
         from kintsugi.reasoning import make_reasoner
@@ -68,7 +72,7 @@ class AgentChord:
         steps_per_tick = max(1, round(cfg.sim.control_dt_s / cfg.sim.timestep_s))
         try:
             first = robot.observation(images=self.ctx.reasoner.backend != "embedded")
-            compiled = compile_graph(reasoner, self.ctx.task, first)
+            compiled = compile_graph(reasoner, self.ctx.task, first, arranger=self.arranger)
             planning_calls = len(reasoner.records)
             keyframes = TabletopKeyframes(cfg)
             t0 = time.perf_counter()
@@ -128,15 +132,34 @@ def metrics_of(record: Any) -> AgentChordMetrics | None:
     return None
 
 
+def _tabletop(ctx: Any, name: str) -> None:
+    from kintsugi.tasks.tabletop.context import TabletopContext
+
+    if not isinstance(ctx, TabletopContext):
+        raise ConfigError(f"method {name!r} runs the tabletop tasks (system B) only")
+
+
 @METHODS.register("agentchord", "AgentChord: composer + arranger compile a recovery-augmented task graph once; "
                   "the conductor runs it with monitors and pre-compiled forward recovery, no run-time reasoning",
                   tags=("system-b",))
 def make_agentchord(ctx: Any) -> AgentChord:
-    from kintsugi.tasks.tabletop.context import TabletopContext
-
-    if not isinstance(ctx, TabletopContext):
-        raise ConfigError("method 'agentchord' runs the tabletop tasks (system B) only")
+    _tabletop(ctx, "agentchord")
     return AgentChord(ctx)
+
+
+@METHODS.register("agentchord-bt", "AgentChord's graph and monitors, but on a firing it backtracks to the latest "
+                  "nominal sub-goal that still holds and re-runs the nominal edges (paper's AC-BT ablation)",
+                  tags=("system-b",))
+def make_agentchord_bt(ctx: Any) -> AgentChord:
+    _tabletop(ctx, "agentchord-bt")
+    return AgentChord(ctx, ConductorConfig(on_failure="backtrack"))
+
+
+@METHODS.register("rekep", "ReKep-style: one planning call, the nominal graph's constraints compiled once as "
+                  "path monitors (no anticipated failure modes), backtrack on a violation", tags=("system-b",))
+def make_rekep(ctx: Any) -> AgentChord:
+    _tabletop(ctx, "rekep")
+    return AgentChord(ctx, ConductorConfig(on_failure="backtrack"), arranger=False)
 
 
 __all__ = ["AgentChord", "AgentChordMetrics", "KeyframeError", "KintsugiError", "metrics_of"]
