@@ -43,10 +43,34 @@ def test_a_drop_runs_the_precompiled_forward_recovery() -> None:
     assert again.without_timings() == r.without_timings()
 
 
-def test_an_unreachable_keyframe_is_a_recorded_failure() -> None:
-    r = _trial("none", 0, **{"motion.workspace_z_m": [0.005, 0.12]})  # no pouring height is in the workspace
-    assert not r.success and not r.framework_success
-    assert r.error is not None and "no feasible keyframe" in r.error and "s3_carry_over" in r.error
+def test_an_unreachable_keyframe_is_refused_with_the_solvers_message() -> None:
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes
+    from kintsugi.tasks.tabletop.config import TabletopConfig
+    from tests.taskgraph_fixtures import composer_request, tabletop_vocab
+    from kintsugi.reasoning.composer import check_composition, embedded_compose
+
+    graph = check_composition(embedded_compose(composer_request()), tabletop_vocab())
+    far_cup = SimpleNamespace(centroid=(1.5, 0.0, 0.045), axis=(0.0, 0.0, 1.0), tilt_deg=0.0, upright=True,
+                              extent=(0.09, 0.09, 0.09), n_points=500,
+                              extremes={"top": (1.5, 0.0, 0.09), "bottom": (1.5, 0.0, 0.0)})
+    bottle = SimpleNamespace(centroid=(0.4, -0.26, 0.22), axis=(0.0, 0.0, 1.0), tilt_deg=0.0, upright=True,
+                             extent=(0.2, 0.06, 0.06), n_points=500,
+                             extremes={"top": (0.4, -0.26, 0.32), "bottom": (0.4, -0.26, 0.12)})
+    arm = SimpleNamespace(gripper_opening_m=0.06, gripper_closed=True)
+    kf = TabletopKeyframes(TabletopConfig())
+    edge = graph.edge("e3_carry_over")
+    with pytest.raises(KeyframeError, match=r"node 's3_carry_over': no feasible keyframe .*misaligned"):
+        kf.move_target(edge, graph.node(edge.target), {"cup": far_cup, "bottle": bottle}, {"bottle": np.zeros(3)}, arm)
+    near_cup = SimpleNamespace(**{**far_cup.__dict__, "centroid": (0.46, 0.0, 0.045),
+                                  "extremes": {"top": (0.46, 0.0, 0.09), "bottom": (0.46, 0.0, 0.0)}})
+    solved, call = kf.move_target(edge, graph.node(edge.target), {"cup": near_cup, "bottle": bottle},
+                                  {"bottle": np.zeros(3)}, arm)
+    assert solved.ok and call["action"] == "move_to_target" and call["rpy_deg"] == (0.0, 90.0, 0.0)
+    assert abs(call["xyz"][1] - (-0.1)) < 0.02 and call["xyz"][2] >= 0.09 + 0.02 - 1e-3
 
 
 @pytest.mark.parametrize("method, calls", [("agentchord-bt", 2), ("rekep", 1)])

@@ -28,6 +28,10 @@ LIFTED_Z_M = 0.05
 _FN = re.compile(r"^\$(x|y|z|mirror)\(\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*(?:,\s*(-?[0-9.eE+-]+)\s*)?\)$")
 
 
+class GoalHolds(PlanningError):
+    """Planning found nothing to do: the observed scene already satisfies the goal."""
+
+
 def observed_facts(request: Any, domain: Domain) -> State:
     """Facts read off the observation, for the predicates the domain declares (closed world: the rest are
     false): hand_empty/holding from the arms' pads, upright from perception's uprightness, on_table from the
@@ -126,7 +130,7 @@ def build_graph(task: str, domain: Domain, initial: State, steps: list[GroundOp]
     """A chain graph start -> s1 -> ... -> goal from a plan, with the symbolic state of every node. The goal
     node checks every goal fact (not only the last step's), so the verdict covers the whole task."""
     if not steps:
-        raise PlanningError("the goal already holds in the observed scene; there is nothing to do")
+        raise GoalHolds("the goal already holds in the observed scene; there is nothing to do")
     nodes = [{"id": "start", "description": "the observed scene"}]
     edges = []
     facts = {"start": sorted(atom_text(a) for a in initial)}
@@ -199,4 +203,4 @@ def ask_compose(reasoner: Any, request: ComposerRequest, vocabulary: Vocabulary)
     return out["graph"], reply
 
 
-__all__ = ["ask_compose", "check_composition", "embedded_compose", "observed_facts", "PlanningError"]
+__all__ = ["GoalHolds", "ask_compose", "check_composition", "embedded_compose", "observed_facts", "PlanningError"]

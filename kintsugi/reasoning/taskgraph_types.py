@@ -103,6 +103,10 @@ class SeenObject(StrictModel):
     tilt_deg: float | None = None
     upright: bool | None = None
     extent: Vec3 | None = None
+    extremes: dict[str, Vec3] = Field(default_factory=dict)
+    """Named extremal points (top, bottom, axis ends, a container's opening)."""
+    axis: Vec3 | None = None
+    n_points: int = 0
 
 
 class SeenArm(StrictModel):
@@ -155,3 +159,20 @@ class ArrangerReply(StrictModel):
                                                                              "objects, one per failure mode and edge")
     reasoning: str = Field(default="", max_length=4000)
 
+
+
+class VerifyRequest(StrictModel):
+    """Does a sub-goal (or a path condition) hold now? Asked at run time by the re-planning baselines."""
+
+    task: str
+    subgoal: str = Field(description="what should be true now, in words")
+    constraints: list[dict[str, JsonValue]] = Field(default_factory=list, max_length=32,
+                                                    description="the same as constraint templates (> 0 = violated)")
+    objects: list[SeenObject] = Field(min_length=1, max_length=32)
+    arms: list[SeenArm] = Field(min_length=1, max_length=2)
+    images_png: dict[str, bytes] = Field(default_factory=dict, repr=False)
+
+
+class VerifyReply(StrictModel):
+    success: bool
+    explanation: str = Field(default="", max_length=2000)

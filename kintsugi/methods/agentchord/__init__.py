@@ -2,4 +2,4 @@
 names as a task-graph vocabulary, observation adapters, compile (composer, arranger, keyframes), the
 conductor, and the registered `agentchord` method."""
 
-from kintsugi.methods.agentchord import method  # noqa: F401 - registers the method
+from kintsugi.methods.agentchord import method, replanning  # noqa: F401 - registers the methods

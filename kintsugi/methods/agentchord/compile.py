@@ -37,7 +37,8 @@ class Compiled:
         return self.result.graph
 
 
-def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = True) -> Compiled:
+def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = True,
+                  goal: list[str] | None = None) -> Compiled:
     """spec: the task's TaskSpec (instruction, goal, objects); observation: the robot's first Observation.
     Raises ReasoningError (recorded in the transcript when the reasoner records) when a role fails.
     With `arranger=False` (ReKep-style) there is one planning call: the monitors are the nominal graph's own
@@ -46,7 +47,8 @@ def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = T
     objects, arms = seen_objects(observation.objects), seen_arms(observation.arms)
     t0 = time.perf_counter()
     try:
-        request = ComposerRequest(task=spec.instruction, goal=list(spec.goal), objects=objects, arms=arms,
+        request = ComposerRequest(task=spec.instruction, goal=list(spec.goal if goal is None else goal),
+                                  objects=objects, arms=arms,
                                   domain=TABLETOP_DOMAIN, images_png=dict(observation.images_png))
     except ValidationError as exc:
         raise PlanningError(f"task {spec.name!r} cannot be composed: {describe_validation_error(exc)}") from None

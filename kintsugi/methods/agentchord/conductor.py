@@ -15,7 +15,7 @@ control steps (shorter than one sample) is met by one violated sample.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any, Callable, Literal
 
 import numpy as np
 
@@ -72,7 +72,7 @@ def _objects_of(edge: Edge) -> set[str]:
 class Conductor:
     def __init__(self, graph: TaskGraph, robot: Any, keyframes: TabletopKeyframes, log: TrialLog,
                  steps_per_tick: int, compiled_keyframes: dict[str, np.ndarray] | None = None,
-                 config: ConductorConfig = ConductorConfig()) -> None:
+                 config: ConductorConfig = ConductorConfig(), metrics: Metrics | None = None) -> None:
         self.graph = graph
         self.robot = robot
         self.keyframes = keyframes
@@ -80,7 +80,9 @@ class Conductor:
         self.steps_per_tick = steps_per_tick
         self.last = dict(compiled_keyframes or {})
         self.config = config
-        self.metrics = Metrics()
+        self.metrics = metrics if metrics is not None else Metrics()
+        self.after_action: Callable[[Edge, int], bool] | None = None
+        """Optional check after each atomic action (edge, index) -> failed? (the re-planning baselines' verifier)."""
         self.ctg = cost_to_go(graph)
         self.arms = {a.args.get("arm") for e in graph.edges for a in e.actions if isinstance(a.args.get("arm"), str)}
 
@@ -125,8 +127,10 @@ class Conductor:
             # One sample per atomic action: see the module docstring for why W becomes 1.
             once = [m.model_copy(update={"window": 1}) for m in edge.monitors]
             bank = MonitorBank(once, features(self.robot, objs))
-        for action in edge.actions:
+        for i, action in enumerate(edge.actions):
             self._execute(edge, action.name, dict(action.args))
+            if with_monitors and self.after_action is not None and self.after_action(edge, i):
+                return Firing("verifier", "verify_failed", None, float("nan"), i)
             if bank is not None:
                 firing = bank.step(features(self.robot, objs))
                 if firing is not None:

@@ -20,7 +20,8 @@ def seen_objects(objects: dict[str, Any]) -> list[SeenObject]:
         out.append(SeenObject(
             name=name, visible=bool(f.visible), centroid=f.centroid,
             top_z=ex["top"][2] if "top" in ex else None, bottom_z=ex["bottom"][2] if "bottom" in ex else None,
-            tilt_deg=f.tilt_deg, upright=f.upright, extent=f.extent))
+            tilt_deg=f.tilt_deg, upright=f.upright, extent=f.extent, extremes=dict(ex),
+            axis=f.axis if f.upright is not None else None, n_points=int(f.n_points)))
     return out
 
 

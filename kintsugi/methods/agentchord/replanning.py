@@ -1,0 +1,184 @@
+"""The re-planning baselines (paper Sec. IV-A): the reasoner is asked again at run time.
+
+- `inner-monologue`: after every sub-goal the verifier is asked whether it holds; if not, re-plan (composer
+  on the current observation) and go on with the new graph.
+- `doremi`: the verifier is asked after every atomic action (the finest period the robot API allows) whether
+  the held objects' path conditions still hold, and at every sub-goal; re-plan on a failure.
+- `code-as-monitor`: the arranger's monitors, compiled once and detect-only; the verifier at every sub-goal;
+  re-plan on a firing or a failed check.
+Execution is the same conductor as AgentChord's (keyframes, settle before re-perceiving), so the methods
+differ only in how failures are found and handled. Re-planning sees only the observation: the embedded
+composer plans from the facts it reads off it (a pour already done is not visible, so it is poured again).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from kintsugi.errors import ConfigError
+from kintsugi.methods import METHODS
+from kintsugi.methods.agentchord.compile import compile_graph, persistent_monitors
+from kintsugi.methods.agentchord.conductor import Conductor, ConductorConfig, Metrics
+from kintsugi.methods.agentchord.keyframes import TabletopKeyframes
+from kintsugi.methods.agentchord.method import LATENCY_MODEL_S, RunFigures
+from kintsugi.methods.agentchord.observe import seen_arms, seen_objects
+from kintsugi.reasoning.composer import GoalHolds
+from kintsugi.reasoning.taskgraph_types import VerifyRequest
+from kintsugi.reasoning.verifier import ask_verify
+from kintsugi.taskgraph.model import Edge, TaskGraph
+from kintsugi.trial import TrialLog
+
+Style = Literal["inner-monologue", "doremi", "code-as-monitor"]
+MAX_REPLANS = 6
+
+
+class Replanning:
+    def __init__(self, ctx: Any, style: Style) -> None:
+        self.ctx = ctx
+        self.style = style
+
+    def run(self, robot: Any, log: TrialLog) -> bool:
+        from kintsugi.reasoning import make_reasoner
+        from kintsugi.reasoning.base import RecordingReasoner
+
+        self.robot, self.log = robot, log
+        self.done: set[str] = set()
+        """Goal facts about history (no constraint can observe them later, e.g. poured) already achieved at a
+        verified sub-goal: a re-plan keeps them (the reasoner remembers what it did), the rest is re-observed."""
+        self.reasoner = RecordingReasoner(make_reasoner(self.ctx.reasoner), records=[])
+        cfg = self.ctx.cfg
+        self.images = self.ctx.reasoner.backend != "embedded"
+        steps_per_tick = max(1, round(cfg.sim.control_dt_s / cfg.sim.timestep_s))
+        keyframes = TabletopKeyframes(cfg)
+        metrics = Metrics()
+        planning_calls = 0
+        try:
+            ok = False
+            for attempt in range(MAX_REPLANS + 1):
+                try:
+                    graph, composed = self._plan(first=attempt == 0)
+                except GoalHolds:
+                    if attempt == 0:
+                        raise
+                    log.event(robot.sim_time, "replan", "the composer finds the goal already holds")
+                    ok = True
+                    break
+                self.node_facts = composed.node_facts
+                if attempt == 0:
+                    planning_calls = len(self.reasoner.records)
+                self.paths: dict[str, list] = {}
+                for proposal in persistent_monitors(graph, composed):
+                    self.paths.setdefault(proposal.edge, []).append(proposal)
+                conductor = Conductor(graph, robot, keyframes, log, steps_per_tick,
+                                      config=ConductorConfig(on_failure="backtrack", max_recoveries=0),
+                                      metrics=metrics)
+                conductor.after_action = self._after_action(graph) if self.style == "doremi" else None
+                ok, failed = self._conduct(conductor, graph)
+                if not failed:
+                    break
+                metrics.recoveries += 1
+                log.event(robot.sim_time, "replan", f"{self.style}: {failed}; asking the composer again")
+            return ok
+        finally:
+            runtime = len(self.reasoner.records) - planning_calls
+            figures = RunFigures(
+                episode_steps=metrics.episode_steps,
+                modelled_execution_time_s=round(robot.sim_time + len(self.reasoner.records) * LATENCY_MODEL_S, 4),
+                latency_model_s=LATENCY_MODEL_S, planning_reasoning_calls=planning_calls,
+                runtime_reasoning_calls=runtime, recovery_latency_steps=metrics.recovery_latency_steps,
+                recoveries=metrics.recoveries, actions=metrics.actions, graph_nodes=0, graph_edges=0, monitors=0)
+            log.event(robot.sim_time, "metrics", figures.model_dump_json())
+            log.transcript.extend(r.model_dump(mode="json") for r in self.reasoner.records)
+
+    def _plan(self, first: bool) -> tuple[TaskGraph, Any]:
+        obs = self.robot.observation(images=self.images)
+        goal = [g for g in self.ctx.task.goal if g not in self.done] or None
+        compiled = compile_graph(self.reasoner, self.ctx.task, obs, arranger=self.style == "code-as-monitor",
+                                 goal=goal)
+        graph = compiled.graph
+        if self.style == "code-as-monitor":  # detect only: the reasoner is asked again instead of a branch
+            graph = TaskGraph.from_data({**graph.model_dump(), "nodes": [n.model_dump() for n in graph.nodes
+                                                                         if n.kind == "nominal"],
+                                         "edges": [{**e.model_dump(), "monitors": [
+                                             {**m.model_dump(), "recovery": None} for m in e.monitors]}
+                                             for e in graph.edges if e.kind == "nominal"]})
+        else:
+            graph = compiled.nominal
+        return graph, compiled.composer
+
+    def _conduct(self, conductor: Conductor, graph: TaskGraph) -> tuple[bool, str | None]:
+        """Run the graph edge by edge with the style's checks; (verdict, why it must re-plan or None)."""
+        from kintsugi.taskgraph.forward import next_edge
+
+        node = graph.start
+        while node != graph.goal:
+            edge = next_edge(graph, node, conductor.ctg)
+            firing = conductor._run_edge(edge, with_monitors=True)
+            if firing is not None:
+                self._settle(conductor, edge)
+                return False, f"{firing.failure_mode} on {edge.id}"
+            node = edge.target
+            if not self._verify(graph, node):
+                self._settle(conductor, edge)
+                return False, f"sub-goal {node!r} not verified"
+            self._remember(node)
+        return conductor._goal_holds(), None
+
+    def _settle(self, conductor: Conductor, edge: Edge) -> None:
+        """Let a dropped object come to rest before the next observation is planned from (as AgentChord does)."""
+        conductor.metrics.recovery_latency_steps.append(0)
+        arm = next((a.args["arm"] for a in edge.actions if isinstance(a.args.get("arm"), str)), None)
+        if arm is not None:
+            conductor._wait_still(arm, set(self.ctx.task.objects), edge)
+
+    def _remember(self, node: str) -> None:
+        from kintsugi.methods.agentchord.domain import TABLETOP_DOMAIN
+        from kintsugi.reasoning.taskgraph_types import parse_atom
+
+        unobservable = {p.name for p in TABLETOP_DOMAIN.predicates if not p.constraints}
+        facts = set(self.node_facts.get(node, []))
+        for g in self.ctx.task.goal:
+            positive, name, args = parse_atom(g)
+            if positive and name in unobservable and f"{name}({', '.join(args)})" in facts:
+                self.done.add(g)
+
+    def _verify(self, graph: TaskGraph, node_id: str) -> bool:
+        node = graph.node(node_id)
+        return self._ask(node.description or node.id, list(node.constraints))
+
+    def _after_action(self, graph: TaskGraph):  # noqa: ANN202 - the conductor's hook
+        def check(edge: Edge, i: int) -> bool:
+            monitors = self.paths.get(edge.id, [])
+            return not self._ask(f"still holding as intended during {edge.description or edge.id}",
+                                 [p.monitor.check for p in monitors])
+        return check
+
+    def _ask(self, subgoal: str, constraints: list) -> bool:
+        if not constraints:
+            return True  # nothing to check: no call
+        names = {e for c in constraints for e, role, _ in c.refs() if role != "arm"}
+        obs_objects = self.robot.features(names or None)
+        arms = {a: self.robot.arm_state(a) for a in ("left", "right")}
+        request = VerifyRequest(task=self.ctx.task.instruction, subgoal=subgoal,
+                                constraints=[c.model_dump(mode="json") for c in constraints],
+                                objects=seen_objects(obs_objects), arms=seen_arms(arms),
+                                images_png=self.robot.observation(images=True).images_png if self.images else {})
+        return ask_verify(self.reasoner, request).success
+
+
+def _factory(style: Style):  # noqa: ANN202
+    def make(ctx: Any) -> Replanning:
+        from kintsugi.tasks.tabletop.context import TabletopContext
+
+        if not isinstance(ctx, TabletopContext):
+            raise ConfigError(f"method {style!r} runs the tabletop tasks (system B) only")
+        return Replanning(ctx, style)
+    return make
+
+
+METHODS.register("inner-monologue", "the reasoner verifies every sub-goal and re-plans (composer) on a failure; "
+                 "no compiled monitors", tags=("system-b",))(_factory("inner-monologue"))
+METHODS.register("doremi", "the reasoner verifies the held objects' conditions after every atomic action and "
+                 "every sub-goal, re-plans on a failure", tags=("system-b",))(_factory("doremi"))
+METHODS.register("code-as-monitor", "the arranger's monitors compiled once (detect only); the reasoner verifies "
+                 "every sub-goal and re-plans on a firing or a failed check", tags=("system-b",))(_factory("code-as-monitor"))
