@@ -31,6 +31,8 @@ from kintsugi.trial import SkillLog, TrialLog
 
 SETTLE_M = 0.001
 """Two reads of every watched centroid this close (about 0.1 s apart): the objects are at rest."""
+SETTLE_READS = 2
+"""Consecutive still pairs required (one pair can alias with a rocking object's period)."""
 SETTLE_TRIES = 25
 
 
@@ -209,12 +211,14 @@ class Conductor:
         """True once the objects are at rest; False if they still move after SETTLE_TRIES reads."""
         if not objs:
             return True
-        prev = None
+        prev, still = None, 0
         for _ in range(SETTLE_TRIES):
             self._execute(edge, "open_gripper", {"arm": arm})
             now = self.robot.features(objs)
             pts = np.array([now[k].centroid for k in sorted(objs) if now[k].centroid is not None])
-            if prev is not None and pts.shape == prev.shape and np.all(np.linalg.norm(pts - prev, axis=1) < SETTLE_M):
+            moved = prev is None or pts.shape != prev.shape or not np.all(np.linalg.norm(pts - prev, axis=1) < SETTLE_M)
+            still = 0 if moved else still + 1
+            if still >= SETTLE_READS:
                 return True
             prev = pts
         return False

@@ -34,7 +34,7 @@ def seen_arms(arms: dict[str, Any]) -> list[SeenArm]:
 def arm_features(arm: Any) -> ArmState:
     """One arm's proprioception as the monitors read it: tool position, opening, commanded state, contacts."""
     return ArmState(eef=arm.tcp_pos, opening=float(arm.gripper_opening_m), closed=bool(arm.gripper_closed),
-                    touching=frozenset(k for k, n in arm.touching.items() if n >= 1))
+                    touching=frozenset(k for k, n in arm.touching.items() if n == 2))
 
 
 @dataclass(frozen=True, slots=True)
