@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Literal
 
 import numpy as np
+from rich.markup import escape
 
 from kintsugi.config import StrictModel
 from kintsugi.errors import KintsugiError
@@ -238,6 +239,10 @@ class Conductor:
         self.log.skill(SkillLog(skill=call["action"], goal=goal, terminal={a: round(v * 1000, 2) for a, v in zip("xyz", tcp)},
                                 reached=result.reached, recovery=edge.kind == "recovery", message=result.message,
                                 sim_time=round(self.robot.sim_time, 4)))
+        flag = "reached" if result.reached else ("IK FAILED" if result.ik_failed else "not reached")
+        tag = "[magenta]recovery[/magenta] " if edge.kind == "recovery" else ""
+        self.log.say(f"[dim]{self.robot.sim_time:6.2f}s[/dim] {tag}{escape(edge.id)}: [bold]{escape(call['action'])}"
+                     f"[/bold] -> {flag} ({escape(result.message)})", markup=True)
         if result.ik_failed:
             raise KeyframeError(f"{edge.id} {name}: {result.message}")
 
