@@ -99,7 +99,7 @@ class Conductor:
                 self.log.event(self.robot.sim_time, "stuck", f"no edge from {node!r} leads to the goal")
                 return False
             node = edge.target
-            firing = self._run_edge(edge, with_monitors=True)
+            firing = self.run_edge(edge, with_monitors=True)
             while firing is not None and self.config.on_failure == "backtrack":
                 self.metrics.recoveries += 1
                 if self.metrics.recoveries > self.config.max_recoveries:
@@ -120,9 +120,9 @@ class Conductor:
                     return False
                 node = self._run_recovery(edge, firing)
                 firing = self._recheck(edge)
-        return self._goal_holds()
+        return self.goal_holds()
 
-    def _run_edge(self, edge: Edge, with_monitors: bool) -> Firing | None:
+    def run_edge(self, edge: Edge, with_monitors: bool) -> Firing | None:
         self.log.status(f"{edge.kind} {edge.id}")
         bank = None
         objs = _objects_of(edge)
@@ -149,7 +149,7 @@ class Conductor:
         upto = chain[: chain.index(failed.source) + 1]
         names = {e for n in upto for c in self.graph.node(n).constraints for e, role, _ in c.refs() if role != "arm"}
         if arms:
-            self._wait_still(arms[0], names | _objects_of(failed), failed)
+            self.wait_still(arms[0], names | _objects_of(failed), failed)
         f = features(self.robot, names)
         for n in reversed(upto):
             if all(not c.evaluate(f) > 0.0 for c in self.graph.node(n).constraints):
@@ -192,7 +192,7 @@ class Conductor:
         self.metrics.recovery_latency_steps.append(0)  # the chain's first command is the next one issued
         self._settle(failed, edge)
         while True:
-            self._run_edge(edge, with_monitors=False)
+            self.run_edge(edge, with_monitors=False)
             if g.node(edge.target).kind == "nominal":
                 return edge.target
             nxt = next_edge(g, edge.target, self.ctg)
@@ -206,9 +206,9 @@ class Conductor:
         at where a dropped object lies, not where it was falling."""
         arms = [e for m in failed.monitors for e, role, _ in m.check.refs() if role == "arm"]
         if arms:
-            self._wait_still(arms[0], _objects_of(failed), recovery)
+            self.wait_still(arms[0], _objects_of(failed), recovery)
 
-    def _wait_still(self, arm: str, objs: set[str], edge: Edge) -> bool:
+    def wait_still(self, arm: str, objs: set[str], edge: Edge) -> bool:
         """True once the objects are at rest; False if they still move after SETTLE_TRIES reads."""
         if not objs:
             return True
@@ -260,13 +260,13 @@ class Conductor:
         self.metrics.keyframe_solves += 1
         return move
 
-    def _goal_holds(self) -> bool:
+    def goal_holds(self) -> bool:
         goal = self.graph.node(self.graph.goal)
         names = {e for c in goal.constraints for e, role, _ in c.refs() if role != "arm"}
         idle = [a for a, state in goal.gripper.items() if state == "open"]
         if idle:  # judge the scene once it is at rest (a placed object may still rock)
             last = next(e for e in self.graph.edges if e.target == goal.id and e.kind == "nominal")
-            if not self._wait_still(idle[0], names, last):
+            if not self.wait_still(idle[0], names, last):
                 self.log.event(self.robot.sim_time, "goal check", f"{', '.join(sorted(names))} still moving after "
                                f"{SETTLE_TRIES} reads; the goal is not reached at rest")
                 return False

@@ -113,7 +113,7 @@ class Replanning:
         node = graph.start
         while node != graph.goal:
             edge = next_edge(graph, node, conductor.ctg)
-            firing = conductor._run_edge(edge, with_monitors=True)
+            firing = conductor.run_edge(edge, with_monitors=True)
             if firing is not None:
                 self._settle(conductor, edge)
                 return False, f"{firing.failure_mode} on {edge.id}"
@@ -122,14 +122,14 @@ class Replanning:
                 self._settle(conductor, edge)
                 return False, f"sub-goal {node!r} not verified"
             self._remember(node)
-        return conductor._goal_holds(), None
+        return conductor.goal_holds(), None
 
     def _settle(self, conductor: Conductor, edge: Edge) -> None:
         """Let a dropped object come to rest before the next observation is planned from (as AgentChord does)."""
         conductor.metrics.recovery_latency_steps.append(0)
         arm = next((a.args["arm"] for a in edge.actions if isinstance(a.args.get("arm"), str)), None)
         if arm is not None:
-            conductor._wait_still(arm, set(self.ctx.task.objects), edge)
+            conductor.wait_still(arm, set(self.ctx.task.objects), edge)
 
     def _remember(self, node: str) -> None:
         from kintsugi.methods.agentchord.domain import TABLETOP_DOMAIN
