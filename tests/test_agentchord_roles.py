@@ -76,12 +76,18 @@ def test_arranger_adds_forward_branches_from_its_knowledge_base() -> None:
     assert not result.rejected and len(result.kept) == 10
     modes = {(e.id, m.failure_mode) for e, m in result.graph.monitors()}
     assert ("e1_grasp", "missed_grasp") in modes and ("e3_carry_over", "drop") in modes
-    assert ("e6_place", "drop") not in modes  # a drop while placing leaves the merge node's facts true
     assert "toppled(right, bottle): no recovery" in arranged.reasoning
-    for e, m in result.graph.monitors():  # each recovery merges at the failed edge's own target (forward)
+    merges = {}
+    for e, m in result.graph.monitors():  # each recovery merges at the failed edge's target or later (forward)
         branch = next(b for b in result.kept if m.id in b.monitors)
-        assert branch.context == e.source and branch.merge == e.target
-        assert branch.cost_merge <= branch.cost_context
+        assert branch.context == e.source and branch.cost_merge <= branch.cost_context
+        merges[(e.id, m.failure_mode)] = branch.merge
+    assert merges[("e3_carry_over", "drop")] == "s3_carry_over" and merges[("e1_grasp", "missed_grasp")] == "s1_grasp"
+    # a drop while turning back leaves every goal fact true if the bottle lands upright: release, merge at the goal
+    assert merges[("e5_restore", "drop")] == "s6_place" and ("e6_place", "drop") not in merges
+    release = result.graph.edge(next(m.recovery for e, m in result.graph.monitors()
+                                     if e.id == "e5_restore" and m.failure_mode == "drop"))
+    assert [a.name for a in release.actions] == ["open_gripper"] and release.target == "s6_place"
     pour_drop = next(m for e, m in result.graph.monitors() if e.id == "e4_pour" and m.failure_mode == "drop")
     chain = [result.graph.edge(pour_drop.recovery)]
     while result.graph.node(chain[-1].target).kind == "recovery":

@@ -20,17 +20,20 @@ from kintsugi.reasoning.symbolic import PlanningError, State, ground, parse_lite
 from kintsugi.reasoning.taskgraph_types import ArrangerReply, ArrangerRequest, SeenObject
 from kintsugi.taskgraph.augment import augment, parse_proposals
 from kintsugi.taskgraph.base import GraphError
-from kintsugi.taskgraph.forward import FilterResult, forward_filter
+from kintsugi.taskgraph.forward import FilterResult, cost_to_go, forward_filter
 from kintsugi.taskgraph.model import TaskGraph
 
-CARRY_ACTIONS = frozenset({"move_by_offset", "move_to_obj", "move_to_target", "rotate_eef", "place"})
-"""Atomic actions during which a held object can be dropped or slip."""
+CARRY_ACTIONS = frozenset({"move_by_offset", "move_to_obj", "move_to_target", "rotate_eef"})
+"""Atomic actions during which a held object can be dropped or slip (`place` lets go on purpose, so an empty
+hand after it is no failure; a placed object that fell over is the goal check's to see)."""
 EMPTY_GRIP_M = 0.01
 """Fingers closed to less than this have nothing between them (every graspable object is wider)."""
 SLIP_TOL_M = 0.08
 """A held object's centroid farther than this from the grasp point has slipped in the hand."""
 MOVED_TOL_M = 0.03
 TOPPLE_TOL_DEG = 30.0
+RELEASE_COST = 10.0
+"""Control steps of a recovery that only opens the hand (the failure already reached the merge node)."""
 
 
 @dataclass(frozen=True)
@@ -107,21 +110,51 @@ def _candidates(mode: FailureMode, edge: Any, u: State) -> list[tuple[str, str]]
     return out
 
 
+def _merge(start: State, edge: Any, graph: TaskGraph, facts: dict[str, State], ops: list,
+           ctg: dict[str, float]) -> tuple[str, list]:
+    """The merge node and the plan to it: of the failed edge's target and every node after it, the one whose
+    facts the planner reaches for the least cost plus its own cost-to-go (the earliest on a tie, so a branch
+    never duplicates the nominal graph). A plan of no steps (the failure already left that node's facts
+    true, e.g. an object dropped upright where it was to be placed) merges by releasing the hand."""
+    import networkx as nx
+
+    nominal = nx.DiGraph((e.source, e.target) for e in graph.edges if e.kind == "nominal")
+    best = None
+    for w in [edge.target, *nx.descendants(nominal, edge.target)]:
+        try:
+            steps = plan(start, (facts[w], frozenset()), ops)
+        except PlanningError:
+            continue
+        key = (sum(op.cost for op in steps) + (RELEASE_COST if not steps else 0.0) + ctg[w], -ctg[w])
+        if best is None or key < best[0]:
+            best = (key, w, steps)
+    if best is None:
+        raise PlanningError(f"no node from {edge.target!r} on can be reached from the state the failure leaves")
+    return best[1], best[2]
+
+
 def _branch(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: FailureMode, arm: str, obj: str,
-            start: State, goal: State, ops: list, seen: dict[str, SeenObject]) -> dict:
+            start: State, facts: dict[str, State], ops: list, ctg: dict[str, float],
+            seen: dict[str, SeenObject]) -> dict:
     """One RecoveryProposal: monitor, recovery nodes and edges from the failure context to the merge node."""
     from kintsugi.reasoning.composer import edge_actions
 
-    steps = plan(start, (goal, frozenset()), ops)
+    merge, steps = _merge(start, edge, graph, facts, ops, ctg)
     if not steps:
-        raise PlanningError("the failure leaves the merge node's facts already true; nothing to recover")
+        edge_id = f"re.{edge.id}.{mode.name}.{arm}.1"
+        monitor = {"id": f"m.{edge.id}.{mode.name}.{arm}", "failure_mode": mode.name, "check": mode.check(arm, obj),
+                   "margin": mode.margin, "window": mode.window, "recovery": edge_id, "description": mode.why}
+        release = {"id": edge_id, "source": edge.source, "target": merge, "cost": RELEASE_COST,
+                   "actions": [{"name": "open_gripper", "args": {"arm": arm}}],
+                   "description": f"recovery for {mode.name}: {merge} already holds, release"}
+        return {"edge": edge.id, "monitor": monitor, "nodes": [], "edges": [release]}
     tag = f"{edge.id}.{mode.name}.{arm}"
     nodes, edges = [], []
     prev, state = edge.source, start
     for i, op in enumerate(steps, 1):
         after = op.apply(state)
         last = i == len(steps)
-        target = edge.target if last else f"r.{tag}.{i}"
+        target = merge if last else f"r.{tag}.{i}"
         if not last:
             constraints, gripper = node_constraints(request.domain, sorted(after - state), seen)
             nodes.append({"id": target, "description": f"recovering from {mode.name}: {op.label} done",
@@ -154,20 +187,21 @@ def embedded_arrange(request: ArrangerRequest) -> ArrangerReply:
     arms = arms_named(request.task, [a.name for a in request.arms])
     ops = ground(request.domain, arms, [o.name for o in request.objects if o.visible])
     wanted = set(request.failure_modes)
+    facts = {n.id: _facts(request.node_facts[n.id], request) for n in graph.nodes}
+    ctg = cost_to_go(graph)
     proposals: list[dict] = []
     notes: list[str] = []
     for edge in graph.edges:
         if edge.kind != "nominal":
             continue
-        u = _facts(request.node_facts[edge.source], request)
-        v = _facts(request.node_facts[edge.target], request)
+        u = facts[edge.source]
         for mode in FAILURES:
             if mode.name not in wanted:
                 continue
             for arm, obj in _candidates(mode, edge, u):
                 try:
-                    proposals.append(_branch(request, graph, edge, mode, arm, obj, mode.after(u, arm, obj), v, ops,
-                                             seen))
+                    proposals.append(_branch(request, graph, edge, mode, arm, obj, mode.after(u, arm, obj), facts,
+                                             ops, ctg, seen))
                 except PlanningError as exc:
                     notes.append(f"{edge.id} {mode.name}({arm}, {obj}): no recovery ({exc})")
     covered = sorted({p["monitor"]["failure_mode"] for p in proposals})

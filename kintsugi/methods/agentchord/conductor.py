@@ -119,7 +119,9 @@ class Conductor:
                                    f"{self.config.max_recoveries} recoveries")
                     return False
                 node = self._run_recovery(edge, firing)
-                firing = self._recheck(edge)
+                # Read the failed edge's monitors again only where they still apply (a merge past its target,
+                # e.g. a release straight to the goal, leaves the hand empty on purpose).
+                firing = self._recheck(edge) if node == edge.target else None
         return self.goal_holds()
 
     def run_edge(self, edge: Edge, with_monitors: bool) -> Firing | None:
