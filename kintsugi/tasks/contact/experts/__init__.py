@@ -10,7 +10,7 @@ from typing import Callable
 
 from kintsugi.errors import ConfigError
 from kintsugi.tasks.contact.context import ContactContext
-from kintsugi.tasks.contact.experts import picking, placing, pushing
+from kintsugi.tasks.contact.experts import flipping, picking, placing, pushing
 from kintsugi.tasks.contact.fsm import StageFactory
 
 Design = Callable[[ContactContext], list[StageFactory]]
@@ -19,6 +19,8 @@ EXPERTS: dict[str, tuple[Design, Design]] = {
     "pick-box": (picking.pick_box_single, picking.pick_box_fsm),
     "push-force": (pushing.push_force_single, pushing.push_force_fsm),
     "pick-clutter": (placing.pick_clutter_single, placing.pick_clutter_fsm),
+    "flip-box": (flipping.flip_box_single, flipping.flip_box_fsm),
+    "flip-wall": (flipping.flip_wall_single, flipping.flip_wall_fsm),
 }
 
 
