@@ -9,7 +9,7 @@ read here, by the benchmark, only to score).
 
 Last line: one JSON object with mass_error, friction_error (worst over the trials and
 tasks run), cycles (most used), and per-task figures.
-Usage: .venv/bin/python bench/bench_sysid.py [--tasks push-force] [--seeds 0,1,2]
+Usage: .venv/bin/python bench/bench_sysid.py [--tasks push-force,pick-box] [--seeds 0,1,2]
 """
 
 from __future__ import annotations
