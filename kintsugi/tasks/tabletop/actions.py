@@ -46,6 +46,10 @@ class Grasp(_Action):
     obj: str
     pre_grasp_offset: float = Field(0.08, ge=0.0, le=0.3)
     grasp_offset: Vec3 | None = None
+    yaw_deg: float | None = Field(None, ge=-180.0, le=180.0)
+    """Orientation hint: the heading (from +x, about the vertical) of the approach axis for a side grasp,
+    or of the gripper's x axis for a top-down one. Default: away from the arm's base (and, top-down,
+    closing across the object's principal axis)."""
 
 
 class OpenGripper(_Action):

@@ -31,6 +31,7 @@ TABLE_CLEARANCE_M = 0.004
 HOVER_CLEARANCE_M = 0.04
 """The fingers pass this far above an object's top on their way to its pre-grasp pose."""
 FLAT_TILT_DEG = 45.0
+
 AXES = {"normal": 0, "closing": 1, "approach": 2}
 
 
@@ -185,13 +186,15 @@ class Planner:
         if a.grasp_offset is not None:
             c = c + self.object_frame(f) @ np.array(a.grasp_offset)
         radial = math.atan2(c[1] - arm.base[1], c[0] - arm.base[0])
+        if a.yaw_deg is not None:
+            radial = math.radians(a.yaw_deg)
         if shape.grasp == "side_if_upright" and f.upright:
             rot = side_rotation(radial)
             c[2] = max(c[2], PAD_HALF[0] + TABLE_CLEARANCE_M)
             style = "side-on (upright)"
         else:
             yaw = radial
-            if f.tilt_deg is not None and f.axis is not None and f.tilt_deg > FLAT_TILT_DEG:
+            if f.tilt_deg is not None and f.axis is not None and f.tilt_deg > FLAT_TILT_DEG and a.yaw_deg is None:
                 along = math.atan2(f.axis[1], f.axis[0])  # close across the principal axis
                 yaw = radial + _wrap_half_turn(along - radial)
             rot = down_rotation(yaw)

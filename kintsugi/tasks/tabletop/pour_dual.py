@@ -24,8 +24,12 @@ from kintsugi.tasks.tabletop.spec import TaskSpec, at_rest, held, on_table, upri
 from kintsugi.tasks.tabletop.world import TabletopWorld
 
 RECEIVE_XYZ = (0.46, 0.06, 0.16)
-"""Where the left arm holds the cup (its grasp point) while the right arm pours."""
+"""Where the left arm holds the cup (its grasp point, keeping the grasp's orientation) while the right arm pours."""
+CUP_GRASP_YAW_DEG = -90.0
+"""The left arm takes the cup from its left side (gripper pointing -y): its wrist and forearm then stay
+on the far side of the cup from the bottle tipping in from the right."""
 LIFT_M = 0.10
+BACK_OFF_M = 0.08
 
 
 def _drive(left: dict[str, Any] | None, right: dict[str, Any] | None) -> dict[str, Any]:
@@ -36,13 +40,15 @@ def script(obs: Any) -> list[dict[str, Any]]:
     bottle, cup = obs.objects["bottle"].centroid, obs.objects["cup"].centroid
     up = {"action": "move_by_offset", "dxyz": (0.0, 0.0, LIFT_M)}
     return [
-        _drive({"action": "grasp", "obj": "cup"}, {"action": "grasp", "obj": "bottle"}),
+        _drive({"action": "grasp", "obj": "cup", "yaw_deg": CUP_GRASP_YAW_DEG}, {"action": "grasp", "obj": "bottle"}),
         _drive(up, up),
         {"action": "move_to_target", "arm": "left", "xyz": RECEIVE_XYZ},
         {"action": "move_to_obj", "arm": "right", "obj": "cup", "offset": (0.0, -POUR_SIDE_M, POUR_HEIGHT_M),
          "rpy_deg": SIDE_RPY_FORWARD},
         {"action": "rotate_eef", "arm": "right", "angle_deg": POUR_ANGLE_DEG, "axis": "approach"},
         {"action": "rotate_eef", "arm": "right", "angle_deg": -POUR_ANGLE_DEG, "axis": "approach"},
+        # Back the bottle away from the cup first: the two places move in joint space at once.
+        {"action": "move_by_offset", "arm": "right", "dxyz": (0.0, -BACK_OFF_M, 0.0)},
         _drive({"action": "place", "x": cup[0], "y": cup[1]}, {"action": "place", "x": bottle[0], "y": bottle[1]}),
         _drive({"action": "back"}, {"action": "back"}),
     ]
