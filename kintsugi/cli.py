@@ -102,9 +102,11 @@ def _record_path(spec) -> Path:  # noqa: ANN001 - a TrialSpec
 @app.command()
 def run(
     task: Annotated[str, typer.Argument(help="registered task, see `kintsugi tasks`")],
-    method: Annotated[str, typer.Option(help="registered method, see `kintsugi methods`")] = "baseline",
-    shape: Annotated[str, typer.Option("--shape", "--variant", help="task variant (peg shape)")] = "round",
-    condition: Annotated[str, typer.Option(help="randomized condition: none, friction, pose, all")] = "none",
+    method: Annotated[Optional[str], typer.Option(
+        help="registered method, see `kintsugi methods` [default: the task's reference method]")] = None,
+    shape: Annotated[Optional[str], typer.Option(
+        "--shape", "--variant", help="task variant, e.g. a peg shape [default: the task's first]")] = None,
+    condition: Annotated[str, typer.Option(help="condition, see `kintsugi tasks` (e.g. none, pose, all)")] = "none",
     seed: Annotated[int, typer.Option(min=0, help="seed of the condition's random draws (hole offset, grasp "
                                                   "angle, friction); the same seed gives the same trial")] = 0,
     video: Annotated[Optional[Path], typer.Option(help="write an .mp4 or .gif of the scene camera")] = None,
@@ -123,14 +125,15 @@ def run(
     Exits 1 when the trial recorded an error (e.g. an unreachable endpoint); the record is saved first.
     """
     from kintsugi.campaign.executors import failed_record
-    from kintsugi.campaign.plan import build_config, expand
+    from kintsugi.campaign.plan import build_config, expand, task_defaults
     from kintsugi.campaign.runner import first_line
     from kintsugi.outputs import check_output_file
     from kintsugi.tasks import TASKS
     from kintsugi.video import check_video_path
 
     try:  # every name, setting and output path is checked before the trial spends anything
-        cfg = build_config(task=task, methods=[method], variants=[shape], conditions=[condition], trials=1,
+        default_method, default_variant, _ = task_defaults(task)
+        cfg = build_config(task=task, methods=[method or default_method], variants=[shape or default_variant], conditions=[condition], trials=1,
                            base_seed=seed, overrides=_overrides(set_),
                            reasoner=_reasoner(reasoner, model, base_url, api_key_env, structured_output))
         spec = expand(cfg)[0].model_copy(update={"video": str(check_video_path(video)) if video else None})
@@ -166,11 +169,12 @@ def bench(
     suite: Annotated[Optional[str], typer.Option(
         help="a named campaign of the task (e.g. peg-insertion's `stretch`): its methods, variants, conditions, "
              "trials and config; options given here go on top")] = None,
-    methods: Annotated[Optional[str], typer.Option(help="comma-separated methods [default: baseline]")] = None,
+    methods: Annotated[Optional[str], typer.Option(
+        help="comma-separated methods [default: the task's reference method]")] = None,
     shapes: Annotated[Optional[str], typer.Option(
-        "--shapes", "--variants", help="comma-separated variants [default: round]")] = None,
+        "--shapes", "--variants", help="comma-separated variants [default: the task's first, e.g. round]")] = None,
     conditions: Annotated[Optional[str], typer.Option(
-        help="comma-separated conditions [default: none,friction,pose,all]")] = None,
+        help="comma-separated conditions [default: the task's, e.g. none,friction,pose,all for the peg]")] = None,
     trials: Annotated[Optional[int], typer.Option(min=1, help="trials per cell [default: 30]")] = None,
     workers: Annotated[int, typer.Option(min=1, help="parallel worker processes")] = 2,
     out: Annotated[Optional[Path], typer.Option(
@@ -194,7 +198,7 @@ def bench(
 
     Every name and setting is checked before the first trial. Exits 1 when any trial errored.
     """
-    from kintsugi.campaign.plan import build_config, suite_of
+    from kintsugi.campaign.plan import build_config, suite_of, task_defaults
     from kintsugi.campaign.render import print_tables
     from kintsugi.campaign.report import write_report
     from kintsugi.campaign.runner import error_summary, run_campaign
@@ -203,12 +207,13 @@ def bench(
     try:
         named = suite_of(task, suite, plugin or []) if suite else None
         out = out or Path("runs") / (suite or "campaign")
+        default_method, default_variant, default_conditions = task_defaults(task, plugin or [])
         cfg = build_config(
             task=task,
-            methods=_csv(methods) if methods else list(named.methods) if named else ["baseline"],
-            variants=_csv(shapes) if shapes else list(named.shapes) if named else ["round"],
+            methods=_csv(methods) if methods else list(named.methods) if named else [default_method],
+            variants=_csv(shapes) if shapes else list(named.shapes) if named else [default_variant],
             conditions=(_csv(conditions) if conditions else list(named.conditions) if named
-                        else ["none", "friction", "pose", "all"]),
+                        else list(default_conditions)),
             trials=trials or (named.trials if named else 30), base_seed=base_seed,
             overrides=(dict(named.overrides) if named else {}) | _overrides(set_), plugins=plugin or [],
             reasoner=_reasoner(reasoner, model, base_url, api_key_env, structured_output),

@@ -293,3 +293,26 @@ def test_trial_log_lines_are_verbatim_unless_marked_up() -> None:
     log.say("[bold]styled[/bold]", markup=True)
     assert console.export_text().splitlines() == [
         "verdict: [bold]kept[/bold] [red]as written", "  1.00s plan-clamped: [/INST] step [b]1[/b]", "styled"]
+
+
+def test_task_defaults_come_from_the_task():
+    from kintsugi.campaign.plan import task_defaults
+
+    assert task_defaults("peg-insertion") == ("baseline", "round", ("none", "friction", "pose", "all"))
+    assert task_defaults("pour-single")[:2] == ("scripted", "default")
+    assert task_defaults("pick-box")[:2] == ("expert-fsm", "default")
+
+
+@pytest.mark.parametrize("task, method", [("pour-single", "baseline"), ("peg-insertion", "scripted"),
+                                          ("pick-box", "agentchord")])
+def test_a_method_of_another_system_is_refused_before_the_trial(tmp_path, task, method):
+    result = invoke("run", task, "--method", method, "--record", tmp_path / "r.json")
+    assert result.exit_code == 2
+    assert f"method {method!r} does not run task {task!r}" in result.output
+    assert not (tmp_path / "r.json").exists()
+
+
+def test_an_unknown_tabletop_variant_is_refused_before_the_trial(tmp_path):
+    result = invoke("run", "pour-single", "--variant", "round", "--record", tmp_path / "r.json")
+    assert result.exit_code == 2 and "unknown variant 'round' for pour-single" in result.output
+    assert not (tmp_path / "r.json").exists()

@@ -101,8 +101,11 @@ def validate(cfg: CampaignConfig) -> None:
         import kintsugi.methods.builtin  # noqa: F401 - registers the built-in methods
         from kintsugi.methods import METHODS
 
+        tag = getattr(task, "method_tag", None)
         for name in cfg.methods:
-            METHODS.get(name)
+            if tag is not None and tag not in METHODS.get(name).tags:
+                fits = ", ".join(e.name for e in METHODS if tag in e.tags) or "(none)"
+                raise ConfigError(f"method {name!r} does not run task {cfg.task!r}; methods that do: {fits}")
     else:
         _known(cfg.methods, own_methods, f"method for task {cfg.task!r}")
     config = task.config(cfg.overrides) if hasattr(task, "config") else None
@@ -114,6 +117,23 @@ def validate(cfg: CampaignConfig) -> None:
     if conditions is not None:
         _known(cfg.conditions, conditions, f"condition for task {cfg.task!r}")
     make_reasoner(cfg.reasoner)
+
+
+def task_defaults(task: str, plugins: list[str] | tuple[str, ...] = ()) -> tuple[str, str, tuple[str, ...]]:
+    """What `run` and `bench` use when no method, variant or condition is given: the task's own.
+
+    (reference method, first default variant, default conditions), so that e.g. `kintsugi bench
+    pour-single` runs `scripted` on `default` instead of the peg task's names.
+    """
+    from kintsugi.campaign.bootstrap import bootstrap
+    from kintsugi.tasks import TASKS
+
+    bootstrap(plugins, task)
+    made = TASKS.get(task).factory()
+    conditions = getattr(made, "conditions", None) or ("none",)
+    return (getattr(made, "reference_method", "baseline"),
+            next(iter(getattr(made, "default_variants", ("default",)))),
+            tuple(getattr(made, "default_conditions", None) or conditions))
 
 
 def suite_of(task: str, name: str, plugins: list[str] | tuple[str, ...] = ()) -> Any:

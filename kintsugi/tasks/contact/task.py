@@ -31,6 +31,9 @@ class ContactTask:
     conditions = CONDITIONS
     reference_method = "expert-fsm"
     """The method that proves the task (contract tests run it)."""
+    method_tag = METHOD_TAG
+    default_conditions = ("all",)
+    """The paper's randomization (`random` draws the same)."""
 
     def __init__(self, spec: ContactTaskDef) -> None:
         self.spec = spec

@@ -28,6 +28,10 @@ class PegInsertionTask:
     variants_help = SHAPES_HELP
     default_variants = ("round", "square", "rectangle")
     conditions = CONDITIONS
+    default_conditions = tuple(CONDITIONS)
+    method_tag = "peg-insertion"
+    """Methods carrying this tag run this task (checked before any trial)."""
+    reference_method = "baseline"
     suites = SUITES
     """Named campaigns, `kintsugi bench peg-insertion --suite stretch`."""
 

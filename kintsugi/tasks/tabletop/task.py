@@ -48,6 +48,8 @@ class TabletopTask:
     default_variants = VARIANTS
     reference_method = "scripted"
     """The method that proves the task (contract tests run it)."""
+    method_tag = METHOD_TAG
+    default_conditions = ("none", "pose", "drop")
 
     def __init__(self, spec: TaskSpec) -> None:
         self.spec = spec
@@ -58,6 +60,10 @@ class TabletopTask:
 
     def config(self, overrides: dict | list) -> TabletopConfig:
         return apply_overrides(TabletopConfig(), overrides)
+
+    def check_variant(self, name: str, config: TabletopConfig | None = None) -> None:
+        if name not in VARIANTS:
+            raise ConfigError(f"unknown variant {name!r} for {self.name}; known: {', '.join(VARIANTS)}")
 
     def build(self, cfg: TabletopConfig, condition: str, seed: int
               ) -> tuple[TabletopWorld, Scorer, Disturbances | None, TrialParams]:
@@ -94,8 +100,7 @@ class TabletopTask:
 
         start = time.perf_counter()
         cfg = self.config(spec.overrides)
-        if spec.variant not in VARIANTS:
-            raise ConfigError(f"unknown variant {spec.variant!r} for {self.name}; known: {', '.join(VARIANTS)}")
+        self.check_variant(spec.variant)
         entry = METHODS.get(spec.method)
         if METHOD_TAG not in entry.tags:
             fits = [e.name for e in METHODS if METHOD_TAG in e.tags]
