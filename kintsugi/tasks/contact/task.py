@@ -106,7 +106,7 @@ class ContactTask:
             executions=dict(log.executions), skills=log.skills,
             events=sorted(log.events, key=lambda e: e.t), transitions=log.transitions,
             sim_time=round(robot.sim_time, 4), wall_time=time.perf_counter() - start,
-            physics_steps=world.steps, error=error, video=video,
+            physics_steps=world.steps, error=error, video=video, transcript=log.transcript,
             details=details.model_dump(mode="json") | ({"method": extra} if extra else {}),
         )
 
