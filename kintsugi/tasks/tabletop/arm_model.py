@@ -88,6 +88,18 @@ def _kinematic_hand(robot: RobotSection, p: str) -> str:
             f'<site name="{p}tcp" pos="0 0 {robot.flange_to_grasp_m:.6g}"/>')
 
 
+def _pad_xml(robot: RobotSection, p: str, name: str, y: float, z: float) -> str:
+    """The pad's collision geom centred at (0, y, z) in the finger: a capsule along the approach
+    axis (default; steady point contacts on round objects) or the full box (`robot.pad_shape`,
+    a flat jaw that sweeps a cloth corner into a ridge)."""
+    if robot.pad_shape == "box":
+        return (f'<geom name="{p}pad_{name}" class="pad" type="box" size="{f(*PAD_HALF)}" pos="0 {y:.6g} {z:.6g}" '
+                f'mass="0.05"/>')
+    return (f'<geom name="{p}pad_{name}" class="pad" type="capsule" size="{PAD_HALF[1]:.6g}" '
+            f'fromto="0 {y:.6g} {z - PAD_HALF[2] + PAD_HALF[1]:.6g} 0 {y:.6g} {z + PAD_HALF[2] - PAD_HALF[1]:.6g}" '
+            f'mass="0.05"/>')
+
+
 def _gripper_xml(robot: RobotSection, p: str, hand_mass: float) -> str:
     tcp = robot.flange_to_grasp_m
     half_open = robot.gripper_max_opening_m / 2
@@ -100,8 +112,7 @@ def _gripper_xml(robot: RobotSection, p: str, hand_mass: float) -> str:
                   <body name="{p}finger_{name}" pos="0 0 {finger_z:.6g}" gravcomp="1">
                     <joint name="{p}finger_{name}" type="slide" axis="0 {-sign:g} 0" range="0 {half_open:.6g}"
                            damping="40" armature="0.01"/>
-                    <geom name="{p}pad_{name}" class="pad" type="capsule" size="{PAD_HALF[1]:.6g}" fromto="0 {y:.6g} {tcp - finger_z - PAD_HALF[2] + PAD_HALF[1]:.6g} 0 {y:.6g} {tcp - finger_z + PAD_HALF[2] - PAD_HALF[1]:.6g}"
-                          mass="0.05"/>
+                    {_pad_xml(robot, p, name, y, tcp - finger_z)}
                     <geom class="visual" type="box" size="{f(*PAD_HALF)}" pos="0 {y:.6g} {tcp - finger_z:.6g}"/>
                     <geom class="visual" type="box" size="{f(PAD_HALF[0], PAD_HALF[1], 0.012)}" pos="0 {y:.6g} 0.012"/>
                   </body>""")

@@ -47,6 +47,9 @@ class RobotSection(StrictModel):
     """Torsional friction of the finger pads (condim 4), as a length."""
     flange_to_grasp_m: float = Field(0.085, gt=0.03)
     """Flange to the grasp point between the finger pads (the tool centre point)."""
+    pad_shape: Literal["capsule", "box"] = "capsule"
+    """Collision shape of the finger pads: a capsule along the approach axis (rigid objects), or the
+    pad's full box (a flat jaw, for pinching cloth)."""
 
     @model_validator(mode="after")
     def _six_joints(self) -> RobotSection:

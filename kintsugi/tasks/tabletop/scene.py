@@ -12,6 +12,7 @@ each other; objects, pads and the table (contype 1) touch everything.
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
@@ -62,7 +63,28 @@ def _regions(cfg: TabletopConfig, names: Sequence[str], relative_to: str | None 
     return "\n    ".join(out)
 
 
-def build_scene_xml(cfg: TabletopConfig, objects: Sequence[str], targets: Sequence[str] = ()) -> str:
+@dataclass(frozen=True)
+class SceneExtra:
+    """What a task adds to the shared scene beyond rigid objects (e.g. a cloth): worldbody XML,
+    `<option>` attributes that replace the defaults for that scene only, and the names of the
+    flex objects it brings (world.pad_contacts reports them like objects)."""
+
+    worldbody: str = ""
+    option: dict[str, str] = field(default_factory=dict)
+    flexes: tuple[str, ...] = ()
+
+
+def _option_xml(cfg: TabletopConfig, extra: SceneExtra | None) -> str:
+    s = cfg.sim
+    attrs = {"timestep": f"{s.timestep_s:.6g}", "integrator": "implicitfast", "cone": "elliptic",
+             "impratio": f"{s.impratio:.6g}", "solver": "Newton", "iterations": str(s.iterations),
+             "ls_iterations": "20", "gravity": "0 0 -9.81"}
+    attrs |= extra.option if extra is not None else {}
+    return "<option " + " ".join(f'{k}="{v}"' for k, v in attrs.items()) + "/>"
+
+
+def build_scene_xml(cfg: TabletopConfig, objects: Sequence[str], targets: Sequence[str] = (),
+                    extra: SceneExtra | None = None) -> str:
     s, t, r = cfg.sim, cfg.table, cfg.robot
     solref = f"{s.contact_timeconst_s:.6g} 1"
     arms = "".join(arm_xml(r, arm) for arm in ARMS)
@@ -74,8 +96,7 @@ def build_scene_xml(cfg: TabletopConfig, objects: Sequence[str], targets: Sequen
     return f"""
 <mujoco model="tabletop">
   <compiler angle="radian" autolimits="true"/>
-  <option timestep="{s.timestep_s:.6g}" integrator="implicitfast" cone="elliptic" impratio="{s.impratio:.6g}"
-          solver="Newton" iterations="{s.iterations}" ls_iterations="20" gravity="0 0 -9.81"/>
+  {_option_xml(cfg, extra)}
   <size memory="16M"/>
   <visual>
     <quality offsamples="0" shadowsize="0"/>
@@ -101,6 +122,7 @@ def build_scene_xml(cfg: TabletopConfig, objects: Sequence[str], targets: Sequen
     {_regions(cfg, targets)}
     {arms}
     {bodies}
+    {extra.worldbody if extra is not None else ""}
   </worldbody>
   <tendon>
     {tendons}

@@ -21,7 +21,7 @@ from kintsugi.perception.features import SegDepthRenderer
 from kintsugi.tasks.tabletop.arm_model import JOINTS
 from kintsugi.tasks.tabletop.config import ARMS, TabletopConfig
 from kintsugi.tasks.tabletop.objects import Shape, shape_of
-from kintsugi.tasks.tabletop.scene import CAMERAS, build_scene_xml
+from kintsugi.tasks.tabletop.scene import CAMERAS, SceneExtra, build_scene_xml
 
 _FATAL_WARNINGS = (
     mujoco.mjtWarning.mjWARN_BADQACC,
@@ -65,7 +65,8 @@ def resolve(model: mujoco.MjModel, objtype: mujoco.mjtObj, name: str) -> int:
     if idx < 0:
         count = {mujoco.mjtObj.mjOBJ_BODY: model.nbody, mujoco.mjtObj.mjOBJ_JOINT: model.njnt,
                  mujoco.mjtObj.mjOBJ_SITE: model.nsite, mujoco.mjtObj.mjOBJ_GEOM: model.ngeom,
-                 mujoco.mjtObj.mjOBJ_CAMERA: model.ncam, mujoco.mjtObj.mjOBJ_ACTUATOR: model.nu}[objtype]
+                 mujoco.mjtObj.mjOBJ_CAMERA: model.ncam, mujoco.mjtObj.mjOBJ_ACTUATOR: model.nu,
+                 mujoco.mjtObj.mjOBJ_FLEX: model.nflex}[objtype]
         known = [mujoco.mj_id2name(model, objtype, i) for i in range(count)]
         raise UnknownNameError(f"no {objtype.name} named {name!r}; known: {', '.join(filter(None, known))}")
     return idx
@@ -93,13 +94,15 @@ def quat_to_axis(q: np.ndarray) -> np.ndarray:
 
 class TabletopWorld:
     def __init__(self, cfg: TabletopConfig, objects: Sequence[str], start: dict[str, StartPose],
-                 targets: Sequence[str] = ()) -> None:
+                 targets: Sequence[str] = (), extra: SceneExtra | None = None) -> None:
         self.cfg = cfg
         self.objects = tuple(objects)
         self.targets = tuple(targets)
-        self.model = mujoco.MjModel.from_xml_string(build_scene_xml(cfg, self.objects, self.targets))
+        self.model = mujoco.MjModel.from_xml_string(build_scene_xml(cfg, self.objects, self.targets, extra))
         m = self.model
         o = mujoco.mjtObj
+        self.flexes: dict[int, str] = {resolve(m, o.mjOBJ_FLEX, k): k for k in (extra.flexes if extra else ())}
+        """Deformable objects (a cloth) by flex id: pad contacts report them by name like rigid objects."""
         self.arms: dict[str, ArmIds] = {}
         for arm in ARMS:
             joints = [resolve(m, o.mjOBJ_JOINT, f"{arm}_{j}") for j in JOINTS]
@@ -219,6 +222,14 @@ class TabletopWorld:
         for i in range(d.ncon):
             c = d.contact[i]
             g1, g2 = int(c.geom1), int(c.geom2)
+            if self.flexes and (g1 in pads or g2 in pads) and max(c.flex) >= 0:
+                pad = g1 if g1 in pads else g2
+                mujoco.mj_contactForce(self.model, d, i, buf)
+                force += abs(buf[0])
+                name = self.flexes.get(int(max(c.flex)))
+                if name is not None:
+                    touching[name] = touching.get(name, 0) | 1 << pads.index(pad)
+                continue
             if g1 in pads:
                 other, pad = g2, g1
             elif g2 in pads:
