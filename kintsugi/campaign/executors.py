@@ -77,10 +77,16 @@ def _kill(pool: ProcessPoolExecutor) -> None:
 
 
 def warm_up(plugins: list[str]) -> int:
-    """Start a worker and import the plugins in it (errors surface later, per trial)."""
-    for module in plugins:
+    """Start a worker and import the plugins and built-in tasks in it (errors surface later, per trial).
+
+    Every trial calls `load_all()`; importing the worlds (MuJoCo, OpenCV, mink) takes seconds on a
+    loaded machine, which must not be charged to the first trial's timeout.
+    """
+    from kintsugi.tasks import load_all
+
+    for load in [*(lambda m=m: importlib.import_module(m) for m in plugins), load_all]:
         try:
-            importlib.import_module(module)
+            load()
         except Exception:  # noqa: BLE001 - reported by the trial that needs it
             pass
     return os.getpid()
@@ -127,19 +133,18 @@ class ProcessExecutor:
         can miss the death of one spawned after it began waiting; the crash
         then goes unnoticed until another result arrives (or forever, if none
         does). Starting every worker up front with a warm-up task (which also
-        imports the plugins) closes that gap. A one-worker pool needs none: its
-        worker exists before the manager thread starts.
+        imports the plugins and the built-in tasks, so a trial's timeout counts the
+        trial, not the imports) closes that gap.
         """
         pool = ProcessPoolExecutor(max_workers=workers, mp_context=self._ctx, initializer=_ignore_sigint)
-        if workers > 1:
-            warmups = [pool.submit(warm_up, self.plugins) for _ in range(workers)]
-            wait(warmups)
-            if any(isinstance(f.exception(), BrokenProcessPool) for f in warmups):
-                pool.shutdown(wait=False, cancel_futures=True)
-                raise KintsugiError(
-                    "worker processes die while starting (before any trial ran); "
-                    "run with the inline executor to see why"
-                )
+        warmups = [pool.submit(warm_up, self.plugins) for _ in range(workers)]
+        wait(warmups)
+        if any(isinstance(f.exception(), BrokenProcessPool) for f in warmups):
+            pool.shutdown(wait=False, cancel_futures=True)
+            raise KintsugiError(
+                "worker processes die while starting (before any trial ran); "
+                "run with the inline executor to see why"
+            )
         return pool
 
     def run(self, specs: Iterable[TrialSpec]) -> Iterator[tuple[TrialSpec, TrialRecord]]:
