@@ -92,8 +92,11 @@ def _interp(c: _Cursor, s: float) -> np.ndarray:
 
 
 def run_programs(world: TabletopWorld, programs: dict[str, list[Step]], motion: MotionSection,
-                 on_tick: Callable[[], None] | None = None) -> dict[str, list[StepReport]]:
-    """Run each arm's steps until all arms finish; returns one report per step and arm."""
+                 on_tick: Callable[[], None] | None = None,
+                 stop: Callable[[], bool] | None = None) -> dict[str, list[StepReport]]:
+    """Run each arm's steps until all arms finish, or until `stop()` (asked after every control tick)
+    says to stop: then the arms hold their last joint targets and unfinished steps have no report.
+    Returns one report per finished step and arm."""
     cursors = {arm: _Cursor(list(steps)) for arm, steps in programs.items()}
     for arm, c in cursors.items():
         _start(world, arm, c, motion)
@@ -101,6 +104,8 @@ def run_programs(world: TabletopWorld, programs: dict[str, list[Step]], motion: 
         world.tick()
         if on_tick is not None:
             on_tick()
+        if stop is not None and stop():
+            break
         t = float(world.data.time)
         for arm, c in cursors.items():
             if c.done:

@@ -10,6 +10,7 @@ in every observation's `features_source`).
 from __future__ import annotations
 
 import warnings
+from dataclasses import dataclass
 from typing import Any, Callable, Iterable, Literal, Protocol
 
 import cv2
@@ -65,6 +66,8 @@ class ActionResult(StrictModel):
     """Every move of the action ended at its target (within motion.reach_tol_*), settled."""
     ik_failed: bool = False
     clipped: bool = False
+    interrupted: bool = False
+    """A step observer stopped the action before it finished (the arms hold where they were commanded)."""
     steps: int = 0
     sim_time: float = 0.0
     pos_err_m: float = 0.0
@@ -74,6 +77,37 @@ class ActionResult(StrictModel):
 
 class ActionHook(Protocol):
     def begin_action(self, planned_s: float, arms: tuple[str, ...]) -> None: ...
+
+
+@dataclass(frozen=True, slots=True)
+class ControlStep:
+    """One control period of a running atomic action, as a step observer is told of it."""
+
+    index: int
+    """Control steps this robot has run since it was built (the tick just finished is `index`)."""
+    t: float
+    action: str
+    arms: tuple[str, ...]
+    step_in_action: int
+    """1 on the action's first control step."""
+
+
+@dataclass(frozen=True, slots=True)
+class GripSense:
+    """The cheap per-control-step read of one arm: tool position, gripper, which objects both finger pads
+    touch (what encoders and tactile pads give at control rate, without images or joint bookkeeping)."""
+
+    eef: tuple[float, float, float]
+    opening: float
+    closed: bool
+    touching: frozenset[str]
+    """Objects touched by both finger pads (held)."""
+    pad_force_n: float
+
+
+StepObserver = Callable[[ControlStep], "bool | None"]
+"""Called after every control step of an atomic action; reads the robot (sensors, features) as it likes.
+Returning True asks the robot to stop the running action at once (a monitor fired)."""
 
 
 def _rpy_deg(rot: np.ndarray) -> Vec3:
@@ -106,6 +140,12 @@ class TabletopRobot:
         self.features_source = self._perception.mode
         self.bases = {arm: np.array(base_position(cfg.robot, arm)) for arm in ARMS}
         self.cameras = CAMERAS
+        self.step_observers: list[StepObserver] = []
+        """Per-control-step observers (online monitors, trajectory loggers): each is called after every
+        control step of every atomic action, in list order, all of them every step; any returning True
+        interrupts the running action (the result says `interrupted`)."""
+        self.control_steps = 0
+        """Control steps run by atomic actions so far (what `ControlStep.index` counts)."""
 
     @property
     def sim_time(self) -> float:
@@ -126,6 +166,15 @@ class TabletopRobot:
             tcp_rpy_deg=_rpy_deg(rot),
             gripper_opening_m=w.gripper_opening(arm), gripper_closed=w.gripper_commanded_closed(arm),
             touching=touching, pad_force_n=force)
+
+    def grip_sense(self, arm: str) -> GripSense:
+        """Proprioception and finger-pad touch only: cheap enough to read every control step."""
+        w = self._world
+        pos, _ = w.tcp_pose(arm)
+        touching, force = w.pad_contacts(arm)
+        return GripSense(eef=(float(pos[0]), float(pos[1]), float(pos[2])), opening=w.gripper_opening(arm),
+                         closed=w.gripper_commanded_closed(arm),
+                         touching=frozenset(k for k, n in touching.items() if n == 2), pad_force_n=force)
 
     def observation(self, images: bool = True) -> Observation:
         return Observation(
@@ -159,7 +208,24 @@ class TabletopRobot:
         if self._hook is not None:
             planned = max(planned_duration(s, self._world.joint_targets(a), self._motion) for a, s in programs.items())
             self._hook.begin_action(planned, arms)
-        reports = run_programs(self._world, programs, self._motion, self._on_tick)
+        stopped = [False]
+        first = self.control_steps
+
+        def observe() -> bool:
+            self.control_steps += 1
+            if self.step_observers:
+                step = ControlStep(self.control_steps, self.sim_time, action.action, arms, self.control_steps - first)
+                for obs in list(self.step_observers):
+                    if obs(step):
+                        stopped[0] = True
+            return stopped[0]
+
+        reports = run_programs(self._world, programs, self._motion, self._on_tick, observe)
+        if stopped[0]:
+            return ActionResult(action=action.action, arms=arms, reached=False, clipped=self._planner.clipped,
+                                interrupted=True, steps=self._world.steps - steps0, sim_time=self.sim_time - t0,
+                                message=f"interrupted by a step observer after {self.control_steps - first} "
+                                        "control steps")
         pos_err = max((r.pos_err_m for rs in reports.values() for r in rs), default=0.0)
         rot_err = max((r.rot_err_deg for rs in reports.values() for r in rs), default=0.0)
         settled = all(r.settled for rs in reports.values() for r in rs)
