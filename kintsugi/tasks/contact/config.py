@@ -38,6 +38,8 @@ class EffectorSection(StrictModel):
     """Finger extent along the hand's x axis (across the pinch)."""
     finger_thickness_m: float = Field(0.012, gt=0.004)
     pad_friction: float = Field(1.2, gt=0)
+    pad_torsion_m: float = Field(0.01, ge=0)
+    """Torsional friction of the finger pads (condim 4): resists an object turning in the pinch."""
     hand_mass_kg: float = Field(0.4, gt=0)
     finger_mass_kg: float = Field(0.05, gt=0)
     armature: float = Field(0.05, ge=0)
@@ -105,6 +107,17 @@ class SysIdSection(StrictModel):
     mass_bounds_kg: Range = (0.02, 5.0)
     """Where the fit searches the object's mass."""
     friction_bounds: Range = (0.05, 1.5)
+
+
+class CoralSection(StrictModel):
+    """The `coral` methods (CoRAL and its ablations): attempts and the retrieval memory."""
+
+    max_attempts: int = Field(4, ge=1, le=10)
+    """MPPI attempts per trial; the outer loop adapts after each failed one (the scene is reset between)."""
+    memory_path: str | None = None
+    """SQLite file of successful episodes, shared by a campaign's trials (run them with --workers 1, in order)."""
+    memory_threshold: float = Field(0.6, ge=0, le=1)
+    """A stored episode at least this similar replaces the formulation call."""
 
 
 class CameraSection(StrictModel):
@@ -200,13 +213,20 @@ class ContactConfig(StrictModel):
     sim: SimSection = SimSection()
     control: ControlSection = ControlSection()
     sysid: SysIdSection = SysIdSection()
+    coral: CoralSection = CoralSection()
     camera: CameraSection = CameraSection()
 
 
 class PushPickBoardConfig(ContactConfig):
+    effector: EffectorSection = EffectorSection(workspace_z_m=(-0.05, 0.30), grip_force_n=40.0)
+    """The fingertips may go below the table top (beyond its edge; the table still stops them), and the
+    gripper squeezes harder: a board held by its handle pulls on the pinch with its whole lever arm."""
+    sim: SimSection = SimSection(impratio=10.0)
+    """Stiffer friction (MuJoCo's advice for grasping): at impratio 1 a board hanging from its handle
+    creeps round the pinch under its own lever arm."""
     board: BoardSection = BoardSection()
     scoring: PushPickBoardScoring = PushPickBoardScoring()
-    control: ControlSection = ControlSection(episode_s=14.0)
+    control: ControlSection = ControlSection(episode_s=18.0)
 
 
 class PickBoxConfig(ContactConfig):

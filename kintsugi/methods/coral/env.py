@@ -1,0 +1,125 @@
+"""The variables cost code reads, computed from a rollout batch or from one measured state.
+
+Names and meanings are `kintsugi.reasoning.formulate.variable_docs`; this module is their one
+implementation for the control loop. Rollout variables are computed lazily (only what a
+stage's function takes) and once per planning step. Nothing here reads the evaluation world:
+rollouts come from the planning world, states from the robot's `Observation`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, Callable, Iterator
+
+import numpy as np
+
+from kintsugi.tasks.contact.costs import Attractor, View
+from kintsugi.tasks.contact.robot import Observation
+from kintsugi.tasks.contact.spec import corners
+from kintsugi.tasks.contact.world import Scene, rotate, up_axis, yaw_of
+
+
+def static_env(scene: Scene, cfg: Any) -> dict[str, np.ndarray]:
+    """Constants of the trial: known model sizes, fixtures, markers, robot facts."""
+    env: dict[str, np.ndarray] = {
+        "max_opening": np.asarray(cfg.effector.max_opening_m), "finger_length": np.asarray(cfg.effector.finger_length_m),
+        "table_edge_x": np.asarray(cfg.table.edge_x_m)}
+    for name, geo in scene.geometry.items():
+        env[f"{name}_half"] = np.asarray(geo.parts[0].half, float)
+    for name, f in scene.fixtures.items():
+        env[f"{name}_lo"] = np.asarray(f.pos, float) - np.asarray(f.half, float)
+        env[f"{name}_hi"] = np.asarray(f.pos, float) + np.asarray(f.half, float)
+    for name, m in scene.markers.items():
+        env[f"{name}_xy"], env[f"{name}_radius"] = np.asarray([m.x, m.y]), np.asarray(m.radius)
+    return env
+
+
+def _bounds(points: np.ndarray, pos: np.ndarray, quat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World bounding box of an object's corners for poses (..., 3), (..., 4)."""
+    q = np.broadcast_to(quat[..., None, :], (*quat.shape[:-1], len(points), 4))
+    world = pos[..., None, :] + rotate(q, np.broadcast_to(points, (*quat.shape[:-1], *points.shape)))
+    return world.min(axis=-2), world.max(axis=-2)
+
+
+def entry_env(obs: Observation, scene: Scene) -> dict[str, np.ndarray]:
+    """The `start_*` constants of a stage, from the state it began in."""
+    env = {"start_tcp": obs.ee[:3].copy(), "start_yaw": np.asarray(float(obs.ee[3]))}
+    for name, o in obs.objects.items():
+        lo, hi = _bounds(corners(scene.geometry[name]), o.pos, o.quat)
+        env.update({f"start_{name}_pos": o.pos.copy(), f"start_{name}_yaw": np.asarray(float(yaw_of(o.quat))),
+                    f"start_{name}_lo": lo, f"start_{name}_hi": hi})
+    return env
+
+
+class LazyEnv(Mapping):
+    """A mapping computing each variable on first use."""
+
+    def __init__(self, fixed: Mapping[str, np.ndarray], makers: dict[str, Callable[[], np.ndarray]]) -> None:
+        self._fixed, self._makers, self._cache = fixed, makers, {}
+
+    def __getitem__(self, key: str) -> np.ndarray:
+        if key in self._fixed:
+            return self._fixed[key]
+        if key not in self._cache:
+            self._cache[key] = self._makers[key]()
+        return self._cache[key]
+
+    def __contains__(self, key: object) -> bool:
+        return key in self._fixed or key in self._makers
+
+    def __iter__(self) -> Iterator[str]:
+        return iter({*self._fixed, *self._makers})
+
+    def __len__(self) -> int:
+        return len({*self._fixed, *self._makers})
+
+
+def rollout_env(view: View, scene: Scene, fixed: Mapping[str, np.ndarray], attractor: Attractor | None) -> LazyEnv:
+    lay = view.layout
+    makers: dict[str, Callable[[], np.ndarray]] = {
+        "tcp": lambda: view.tcp, "yaw": lambda: view.yaw, "opening": lambda: view.opening,
+        "force": lambda: view.force, "touch": lambda: view.touch, "ctrl": lambda: view.ctrl,
+        "tcp_vel": lambda: view.batch.qvel[:, :, lay.ee_dof[:3]],
+        "step_change": lambda: _step_change(view.ctrl),
+    }
+    for name in scene.geometry:
+        pts = corners(scene.geometry[name])
+        box: dict[str, tuple[np.ndarray, np.ndarray]] = {}
+
+        def bounds(n: str = name, p: np.ndarray = pts, memo: dict = box) -> tuple[np.ndarray, np.ndarray]:
+            if "b" not in memo:
+                memo["b"] = _bounds(p, view.pos(n), view.quat(n))
+            return memo["b"]
+
+        makers.update({
+            f"{name}_pos": (lambda n=name: view.pos(n)), f"{name}_vel": (lambda n=name: view.vel(n)),
+            f"{name}_up": (lambda n=name: view.up(n)), f"{name}_yaw": (lambda n=name: yaw_of(view.quat(n))),
+            f"{name}_lo": (lambda b=bounds: b()[0]), f"{name}_hi": (lambda b=bounds: b()[1]),
+        })
+    if attractor is not None:
+        makers["contact"] = lambda: attractor.distance(view)
+    return LazyEnv(fixed, makers)
+
+
+def _step_change(ctrl: np.ndarray) -> np.ndarray:
+    d = np.diff(ctrl[:, :, :3], axis=1, prepend=ctrl[:, :1, :3])
+    return (d * d).sum(axis=-1)
+
+
+def state_env(obs: Observation, scene: Scene, fixed: Mapping[str, np.ndarray], attractor: Attractor | None,
+              elapsed: float) -> dict[str, np.ndarray]:
+    """The same names for one measured state (no leading axes)."""
+    env = dict(fixed)
+    env.update({"tcp": obs.ee[:3], "yaw": np.asarray(float(obs.ee[3])), "opening": np.asarray(obs.opening),
+                "force": obs.force, "touch": obs.touch, "ctrl": obs.ctrl, "tcp_vel": obs.ee_vel[:3],
+                "step_change": np.asarray(0.0), "elapsed": np.asarray(elapsed)})
+    for name, o in obs.objects.items():
+        lo, hi = _bounds(corners(scene.geometry[name]), o.pos, o.quat)
+        env.update({f"{name}_pos": o.pos, f"{name}_vel": o.lin_vel, f"{name}_up": up_axis(o.quat),
+                    f"{name}_yaw": np.asarray(float(yaw_of(o.quat))), f"{name}_lo": lo, f"{name}_hi": hi,
+                    f"{name}_spin": np.asarray(float(np.linalg.norm(o.ang_vel)))})
+    if attractor is not None:
+        o = obs.objects[attractor.region.obj]
+        env["contact"] = np.asarray(float(np.linalg.norm(attractor.world_targets(o.pos, o.quat) - obs.ee[:3],
+                                                         axis=-1).min()))
+    return env

@@ -1,0 +1,549 @@
+"""The embedded formulation backend: cost code composed from a library of cost terms.
+
+No lookup by task name. The instruction's words choose skills (pick / put down on / push
+against / press with N / flip over / pivot against) and the objects' geometry fills them in:
+which object the words name, whether it stands tall or lies flat, which fixture or marker it
+goes to, which face to push on (the face turned away from the fixture), how high to grasp and
+which side fits the gripper. Every skill writes its stages as functions of the cost language
+(kintsugi.sandbox): the same untrusted-code path a model's reply takes, compiled and probed
+before MPPI sees it. The code reads sizes and poses through variables (`box_half`,
+`start_box_pos`, ...), never as baked numbers, so a stored episode's code fits a new trial
+with a differently sized box. `knobs` are the weights and thresholds the code is written with;
+the adaptation role refines them and the library writes the code again.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+
+from kintsugi.reasoning.coral_types import FormulationReply, FormulationRequest, ObjectState, RegionSpec, StageSpec
+
+DEFAULT_KNOBS: dict[str, float] = {
+    "w_reach": 10.0, "w_smooth": 50.0, "w_yaw": 1.0, "w_contact": 10.0, "w_gap": 30.0, "w_force": 3.0,
+    "w_press_contact": 300.0, "w_tip": 5.0,
+    "clear_m": 0.025, "lift_m": 0.12, "carry_z_m": 0.14, "set_down_m": 0.004, "touch_n": 2.0,
+    "push_z_m": 0.008, "push_height": 0.7, "paddle_m": 0.01, "push_speed_m_s": 0.08,
+    "tip_deg": 45.0, "pivot_deg": 100.0, "flip_deg": 75.0, "reach_tol_m": 0.012, "force_tol_n": 0.4,
+    "timeout_scale": 1.0, "hold_press_s": 3.0,
+}
+"""Weights (cost units per metre, newton, radian) and thresholds the skills are written with."""
+
+HELPERS = '''def wrap_pi(yaw):
+    """Signed distance of an angle to the nearest multiple of pi (a pinch across a box is symmetric)."""
+    return (yaw + pi / 2) % pi - pi / 2
+'''
+
+
+@dataclass
+class Plan:
+    stages: list[StageSpec] = field(default_factory=list)
+    regions: list[RegionSpec] = field(default_factory=list)
+    code: list[str] = field(default_factory=list)
+    why: list[str] = field(default_factory=list)
+
+
+class NotUnderstood(ValueError):
+    """The instruction names no skill the library has, or no object the scene holds."""
+
+
+def words(text: str) -> list[str]:
+    return re.findall(r"[a-z0-9.]+", text.lower())
+
+
+def target_object(req: FormulationRequest) -> ObjectState:
+    """The object the instruction names first (its label or name; plural forms count)."""
+    text = " " + " ".join(words(req.task)) + " "
+    best: tuple[int, ObjectState] | None = None
+    for o in req.objects:
+        for w in {o.name.lower(), *words(o.label)}:
+            w = re.sub(r"\d+$", "", w)
+            for form in (w, w + "s", w + "es"):
+                i = text.find(f" {form} ")
+                if i >= 0 and (best is None or i < best[0]):
+                    best = (i, o)
+    if best is None:
+        raise NotUnderstood(f"the instruction names none of the objects: {', '.join(o.label for o in req.objects)}")
+    return best[1]
+
+
+def force_n(text: str) -> float | None:
+    m = re.search(r"(\d+(?:\.\d+)?)\s*(?:n|newtons?)\b", text.lower())
+    return float(m.group(1)) if m else None
+
+
+def tall(o: ObjectState) -> bool:
+    """Stands on a small face: taller than it is wide, and upright."""
+    return o.size_m[2] > max(o.size_m[0], o.size_m[1]) and o.upright_deg < 30
+
+
+def toward(o: ObjectState, req: FormulationRequest) -> tuple[str | None, int, float]:
+    """The fixture the object goes to (nearest), the world axis and the sign of the push toward it."""
+    if req.fixtures:
+        f = min(req.fixtures, key=lambda f: math.dist(_centre(f), o.pos_m))
+        c = _centre(f)
+        dx, dy = c[0] - o.pos_m[0], c[1] - o.pos_m[1]
+    else:  # away from the robot's home: the far side of the object is free
+        f, (dx, dy) = None, (o.pos_m[0] - req.robot.home_m[0], o.pos_m[1] - req.robot.home_m[1])
+    axis = 0 if abs(dx) >= abs(dy) else 1
+    sign = 1.0 if (dx if axis == 0 else dy) >= 0 else -1.0
+    return (f.name if f else None), axis, sign
+
+
+def _centre(f) -> tuple[float, float, float]:  # noqa: ANN001 - a FixtureView
+    return tuple((a + b) / 2 for a, b in zip(f.lo_m, f.hi_m))  # type: ignore[return-value]
+
+
+def back_face(o: ObjectState, axis: int, sign: float, height_frac: float | None, z_m: float, k: dict[str, float]
+              ) -> RegionSpec:
+    """The face turned away from the push, in the object's frame (its yaw is small): where the closed fingers push.
+    `height_frac` of the object's height, or `z_m` above its bottom."""
+    half = [s / 2 for s in o.size_m]
+    yaw = math.radians(o.yaw_deg)
+    # push direction in the object's frame, snapped to its nearest principal axis
+    wx, wy = (sign, 0.0) if axis == 0 else (0.0, sign)
+    lx, ly = math.cos(yaw) * wx + math.sin(yaw) * wy, -math.sin(yaw) * wx + math.cos(yaw) * wy
+    ax, s = (0, math.copysign(1.0, lx)) if abs(lx) >= abs(ly) else (1, math.copysign(1.0, ly))
+    z = -half[2] + (height_frac * 2 * half[2] if height_frac is not None else z_m)
+    centre = [0.0, 0.0, z]
+    normal = [0.0, 0.0, 0.0]
+    centre[ax], normal[ax] = -s * half[ax], -s
+    return RegionSpec(object=o.name, center=tuple(centre), normal=tuple(normal),  # type: ignore[arg-type]
+                      radius=0.01 if height_frac is not None else 0.008, standoff=k["paddle_m"],
+                      drop=0.0 if height_frac is not None else 0.006)
+
+
+def compose(req: FormulationRequest, knobs: dict[str, float] | None = None) -> FormulationReply:
+    """Instruction + scene -> staged cost code, stages, contact regions. Raises NotUnderstood."""
+    k = {**DEFAULT_KNOBS, **(knobs or {})}
+    text = " ".join(words(req.task))
+    o = target_object(req)
+    plan = Plan(code=[HELPERS])
+    contact = req.contact_strategy
+    others = [x for x in req.objects if x.name != o.name]
+    if "flip" in text or "tip" in text.split():
+        fixture, axis, sign = toward(o, req)
+        if not tall(o) and fixture is not None and any(w in text for w in ("curb", "wall", "fixture", "against")):
+            _pivot(plan, o, fixture, axis, sign, k, contact)
+        else:
+            _tip(plan, o, axis, sign, k, contact)
+    elif "push" in text or "press" in text:
+        fixture, axis, sign = toward(o, req)
+        if fixture is None:
+            raise NotUnderstood("a push 'against' something needs a fixture in the scene; there is none")
+        _push(plan, o, fixture, axis, sign, k, contact)
+        f = force_n(req.task)
+        if f is not None:
+            _press(plan, o, fixture, axis, sign, f, k, contact)
+    elif "pick" in text or "lift" in text:
+        _pick(plan, o, others, k)
+        marker = next((m for m in req.markers if any(w in text for w in ("disc", "goal", "marker", "put", "place"))),
+                      None)
+        if marker is not None and any(w in text for w in (" put ", " place", " on ", "down")):
+            _place(plan, o, marker.name, k)
+        else:
+            _settle(plan, "hold", 0.5, "closed", k)
+    else:
+        raise NotUnderstood("no skill for this instruction: the library knows pick, put down on, push against, "
+                            "press with a force, flip over and pivot against a fixture")
+    return FormulationReply(source=_dedup_params("\n\n\n".join(plan.code)), stages=plan.stages, regions=plan.regions,
+                            knobs=k, reasoning=" ".join(plan.why))
+
+
+def _dedup_params(source: str) -> str:
+    """A skill may name a variable twice when its terms share one (`box_pos`): keep the first."""
+    def fix(m: re.Match) -> str:
+        seen: list[str] = []
+        for p in (x.strip() for x in m.group(2).split(",")):
+            if p and p not in seen:
+                seen.append(p)
+        return f"def {m.group(1)}({', '.join(seen)}):"
+    return re.sub(r"def (\w+)\(([^)]*)\):", fix, source)
+
+
+# --- skills -----------------------------------------------------------------------------------------------------
+
+def _t(k: dict[str, float], s: float) -> float:
+    return round(s * k["timeout_scale"], 3)
+
+
+def _hold_code(name: str, dx: str = "0.0", dy: str = "0.0", dz: str = "0.0", yaw: str = "start_yaw",
+               extra: str = "") -> str:
+    """A cost holding the TCP at start_tcp + (dx, dy, dz) with a yaw."""
+    return f'''def {name}(tcp, yaw, step_change, start_tcp, start_yaw{extra}):
+    ex = tcp[..., 0] - start_tcp[0] - {dx}
+    ey = tcp[..., 1] - start_tcp[1] - {dy}
+    ez = tcp[..., 2] - start_tcp[2] - {dz}
+    return W_REACH * sqrt(ex ** 2 + ey ** 2 + ez ** 2) + W_YAW * wrap_pi(yaw - {yaw}) ** 2 + W_SMOOTH * step_change'''
+
+
+def _sub(code: str, k: dict[str, float]) -> str:
+    for key in ("w_reach", "w_smooth", "w_yaw", "w_contact", "w_gap", "w_force", "w_press_contact", "w_tip"):
+        code = code.replace(key.upper(), repr(round(k[key], 6)))
+    return code
+
+
+def _settle(plan: Plan, name: str, seconds: float, grip: str, k: dict[str, float]) -> None:
+    fn = f"{name}_cost"
+    plan.code.append(_sub(_hold_code(fn), k))
+    plan.code.append(f'''def {name}_done(tcp):
+    return 1.0 + 0.0 * tcp[..., 0]''')
+    plan.stages.append(StageSpec(name=name, cost=fn, done=f"{name}_done", grip=grip, hold_s=seconds,
+                                 timeout_s=seconds + 2.0))
+
+
+def _pick(plan: Plan, o: ObjectState, others: list[ObjectState], k: dict[str, float]) -> None:
+    n = o.name
+    d_params = (f", start_{n}_pos" if others else "") + "".join(f", start_{x.name}_pos" for x in others)
+    lets, clear_a, clear_b = [], [], []
+    for i, x in enumerate(others):
+        lets.append(f"    dx{i} = start_{n}_pos[0] - start_{x.name}_pos[0]\n    dy{i} = start_{n}_pos[1] - start_{x.name}_pos[1]"
+                    f"\n    q{i} = dx{i} ** 2 + dy{i} ** 2")
+        for side, terms in (("a", clear_a), ("b", clear_b)):
+            # squared distance from the nearer finger (centre +- f) to the other object: |d|^2 - 2|f.d| + |f|^2
+            terms.append(f"q{i} - 2.0 * abs(dx{i} * f{side}x + dy{i} * f{side}y) + r{side} ** 2")
+    distances = ("\n" + "\n".join(lets)) if lets else ""
+
+    def nested_min(terms: list[str]) -> str:
+        if not terms:
+            return "0.0"
+        out = terms[0]
+        for t in terms[1:]:
+            out = f"minimum({out}, {t})"
+        return out
+
+    side = f'''    ya = start_{n}_yaw
+    yb = start_{n}_yaw + pi / 2
+    ra = {n}_half[1] + 0.03
+    rb = {n}_half[0] + 0.03
+    cax = -sin(ya)
+    cay = cos(ya)
+    cbx = -sin(yb)
+    cby = cos(yb)
+    fax = ra * cax
+    fay = ra * cay
+    fbx = rb * cbx
+    fby = rb * cby{distances}
+    fit_a = where(2.0 * {n}_half[1] < max_opening - 0.015, 0.0, 1000.0)
+    fit_b = where(2.0 * {n}_half[0] < max_opening - 0.015, 0.0, 1000.0)
+    score_a = fit_a - 10.0 * sqrt({nested_min(clear_a)}) + abs(wrap_pi(start_yaw - ya))
+    score_b = fit_b - 10.0 * sqrt({nested_min(clear_b)}) + abs(wrap_pi(start_yaw - yb))
+    side = where(score_a <= score_b, 1.0, -1.0)
+    aim = start_yaw - wrap_pi(start_yaw - where(side > 0, ya, yb))'''
+    # side = +1: pinch across the object's y (hand yaw = its yaw), -1: across its x. A side must fit the open
+    # gripper; with other objects around, the side whose open fingers come down farthest from them wins, else
+    # the least turn. (Inlined: calls take at most 4 arguments in the cost language.)
+    params = f"start_{n}_yaw, start_yaw, {n}_half, max_opening{d_params}"
+    plan.code.append(f'''def {n}_open({n}_half, max_opening):
+    """Open just wider than the object's wider horizontal side (either side may be the one pinched)."""
+    return minimum(max_opening, 2.0 * maximum({n}_half[0], {n}_half[1]) + 0.035)
+
+
+def {n}_grasp_z({n}_half, finger_length):
+    return maximum(0.006, {n}_half[2] - finger_length / 3.0)''')
+    plan.code.append(f'''def {n}_aim({params}):
+    """The hand yaw to pinch with, chosen once when the stage begins (the variable `kept`)."""
+{side}
+    return aim''')
+    plan.code.append(_sub(f'''def reach_cost(tcp, yaw, step_change, {n}_pos, start_{n}_hi, kept):
+    """Above the object with the hand turned across a side that fits."""
+    ex = tcp[..., 0] - {n}_pos[..., 0]
+    ey = tcp[..., 1] - {n}_pos[..., 1]
+    ez = tcp[..., 2] - start_{n}_hi[2] - {k["clear_m"]}
+    return W_REACH * sqrt(ex ** 2 + ey ** 2 + ez ** 2) + W_YAW * wrap_pi(yaw - kept) ** 2 + W_SMOOTH * step_change
+
+
+def reach_done(tcp, yaw, {n}_pos, start_{n}_hi, kept):
+    ex = tcp[..., 0] - {n}_pos[..., 0]
+    ey = tcp[..., 1] - {n}_pos[..., 1]
+    ez = tcp[..., 2] - start_{n}_hi[2] - {k["clear_m"]}
+    return logical_and(sqrt(ex ** 2 + ey ** 2 + ez ** 2) < {k["reach_tol_m"]}, abs(wrap_pi(yaw - kept)) < 0.06)
+
+
+def descend_cost(tcp, yaw, step_change, {n}_pos, start_{n}_lo, finger_length, {n}_half, start_yaw):
+    """Straight down around it, to a pinch height clear of the table, the hand kept turned as it came."""
+    ex = tcp[..., 0] - {n}_pos[..., 0]
+    ey = tcp[..., 1] - {n}_pos[..., 1]
+    ez = tcp[..., 2] - start_{n}_lo[2] - {n}_grasp_z({n}_half, finger_length)
+    exy = sqrt(ex ** 2 + ey ** 2)
+    return W_REACH * sqrt(exy ** 2 + ez ** 2) + 2.0 * W_REACH * exy + W_YAW * wrap_pi(yaw - start_yaw) ** 2 + W_SMOOTH * step_change
+
+
+def descend_done(tcp, {n}_pos, start_{n}_lo, {n}_half, finger_length):
+    ex = tcp[..., 0] - {n}_pos[..., 0]
+    ey = tcp[..., 1] - {n}_pos[..., 1]
+    ez = tcp[..., 2] - start_{n}_lo[2] - {n}_grasp_z({n}_half, finger_length)
+    return sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.008''', k))
+    plan.code.append(_sub(_hold_code("grasp_cost"), k))
+    plan.code.append(f'''def grasp_done(touch):
+    return min(touch, axis=-1) > {k["touch_n"]}''')
+    plan.code.append(_sub(f'''def lift_cost(tcp, yaw, step_change, start_tcp, start_yaw, {n}_pos, start_{n}_pos):
+    """Up, with the object: a penalty while the object lags below the lift height."""
+    ex = tcp[..., 0] - start_tcp[0]
+    ey = tcp[..., 1] - start_tcp[1]
+    ez = tcp[..., 2] - start_tcp[2] - {k["lift_m"]}
+    lag = relu(start_{n}_pos[2] + {k["lift_m"]} - {n}_pos[..., 2])
+    return W_REACH * sqrt(ex ** 2 + ey ** 2 + ez ** 2) + 2.0 * W_REACH * lag + W_YAW * wrap_pi(yaw - start_yaw) ** 2 + W_SMOOTH * step_change
+
+
+def lift_done(touch, {n}_pos, start_{n}_pos):
+    return logical_and({n}_pos[..., 2] > start_{n}_pos[2] + {k["lift_m"] - 0.02}, min(touch, axis=-1) > 0.5)''', k))
+    plan.stages += [
+        StageSpec(name="reach", cost="reach_cost", done="reach_done", grip=f"{n}_open", keep=f"{n}_aim",
+                  timeout_s=_t(k, 5.0)),
+        StageSpec(name="descend", cost="descend_cost", done="descend_done", grip=f"{n}_open", timeout_s=_t(k, 4.0)),
+        StageSpec(name="grasp", cost="grasp_cost", done="grasp_done", grip="closed", hold_s=0.2,
+                  timeout_s=_t(k, 2.0)),
+        StageSpec(name="lift", cost="lift_cost", done="lift_done", grip="closed", timeout_s=_t(k, 4.0)),
+    ]
+    plan.why.append(f"'{o.label}' is picked: reach above it with the hand turned across a side that fits the "
+                    f"gripper{' and clear of ' + ', '.join(x.label for x in others) if others else ''}, descend, "
+                    f"close until both pads press {k['touch_n']:g} N, lift {k['lift_m'] * 100:g} cm.")
+
+
+def _place(plan: Plan, o: ObjectState, marker: str, k: dict[str, float]) -> None:
+    n = o.name
+    plan.code.append(_sub(f'''def carry_cost(tcp, yaw, step_change, start_tcp, start_yaw, {n}_pos, start_{n}_pos, {marker}_xy):
+    """Above the goal, the object kept where it sits in the hand."""
+    ox = start_tcp[0] - start_{n}_pos[0]
+    oy = start_tcp[1] - start_{n}_pos[1]
+    ex = tcp[..., 0] - {marker}_xy[0] - ox
+    ey = tcp[..., 1] - {marker}_xy[1] - oy
+    ez = tcp[..., 2] - {k["carry_z_m"]}
+    slip = sqrt((tcp[..., 0] - ox - {n}_pos[..., 0]) ** 2 + (tcp[..., 1] - oy - {n}_pos[..., 1]) ** 2)
+    return W_REACH * sqrt(ex ** 2 + ey ** 2 + ez ** 2) + 2.0 * W_REACH * slip + W_YAW * wrap_pi(yaw - start_yaw) ** 2 + W_SMOOTH * step_change
+
+
+def carry_done(tcp, tcp_vel, start_tcp, start_{n}_pos, {marker}_xy):
+    ex = tcp[..., 0] - {marker}_xy[0] - start_tcp[0] + start_{n}_pos[0]
+    ey = tcp[..., 1] - {marker}_xy[1] - start_tcp[1] + start_{n}_pos[1]
+    ez = tcp[..., 2] - {k["carry_z_m"]}
+    return logical_and(sqrt(ex ** 2 + ey ** 2 + ez ** 2) < {k["reach_tol_m"]}, norm(tcp_vel) < 0.05)
+
+
+def lower_cost(tcp, yaw, step_change, start_tcp, start_yaw, start_{n}_pos, {n}_half, {marker}_xy):
+    """Down until the object's bottom is just above the table, over the goal."""
+    ox = start_tcp[0] - start_{n}_pos[0]
+    oy = start_tcp[1] - start_{n}_pos[1]
+    ex = tcp[..., 0] - {marker}_xy[0] - ox
+    ey = tcp[..., 1] - {marker}_xy[1] - oy
+    ez = tcp[..., 2] - ({n}_half[2] + {k["set_down_m"]} + start_tcp[2] - start_{n}_pos[2])
+    return W_REACH * sqrt(ex ** 2 + ey ** 2 + ez ** 2) + W_YAW * wrap_pi(yaw - start_yaw) ** 2 + W_SMOOTH * step_change
+
+
+def lower_done(tcp, start_tcp, start_{n}_pos, {n}_half, {marker}_xy):
+    ex = tcp[..., 0] - {marker}_xy[0] - start_tcp[0] + start_{n}_pos[0]
+    ey = tcp[..., 1] - {marker}_xy[1] - start_tcp[1] + start_{n}_pos[1]
+    ez = tcp[..., 2] - ({n}_half[2] + {k["set_down_m"]} + start_tcp[2] - start_{n}_pos[2])
+    return sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.006''', k))
+    plan.code.append(_sub(_hold_code("release_cost"), k))
+    plan.code.append('''def release_done(opening, touch, max_opening):
+    return logical_and(opening > 0.8 * max_opening, max(touch, axis=-1) < 0.1)''')
+    plan.code.append(_sub(_hold_code("withdraw_up_cost", dz="0.08"), k))
+    plan.code.append('''def withdraw_up_done(tcp, start_tcp):
+    ex = tcp[..., 0] - start_tcp[0]
+    ey = tcp[..., 1] - start_tcp[1]
+    ez = tcp[..., 2] - start_tcp[2] - 0.08
+    return sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.015''')
+    plan.stages += [
+        StageSpec(name="carry", cost="carry_cost", done="carry_done", grip="closed", timeout_s=_t(k, 5.0)),
+        StageSpec(name="lower", cost="lower_cost", done="lower_done", grip="closed", timeout_s=_t(k, 4.0)),
+        StageSpec(name="release", cost="release_cost", done="release_done", grip="open", timeout_s=_t(k, 2.0)),
+        StageSpec(name="withdraw", cost="withdraw_up_cost", done="withdraw_up_done", grip="open",
+                  timeout_s=_t(k, 3.0)),
+    ]
+    plan.why.append(f"then carry it at {k['carry_z_m'] * 100:g} cm over '{marker}', lower it until it nearly "
+                    "touches, open, and withdraw upward.")
+
+
+def _gap(n: str, fixture: str, axis: int, sign: float) -> str:
+    """Distance still to go until the object's leading side meets the fixture's near side (code expression)."""
+    if sign > 0:
+        return f"{fixture}_lo[{axis}] - {n}_hi[..., {axis}]"
+    return f"{n}_lo[..., {axis}] - {fixture}_hi[{axis}]"
+
+
+def _approach(plan: Plan, name: str, o: ObjectState, axis: int, sign: float, z_expr: str, back_m: float,
+              k: dict[str, float]) -> None:
+    """To a point behind the object's back face (along the push), at a height."""
+    n = o.name
+    other = 1 - axis
+    face = f"start_{n}_lo[{axis}]" if sign > 0 else f"start_{n}_hi[{axis}]"
+    plan.code.append(_sub(f'''def {name}_point(start_{n}_lo, start_{n}_hi, start_{n}_pos):
+    return {face} - {sign} * ({k["paddle_m"]} + {back_m})
+
+
+def {name}_cost(tcp, yaw, step_change, start_{n}_lo, start_{n}_hi, start_{n}_pos, {n}_half):
+    """Behind the face to push, at the pushing height, hand square to the push."""
+    ea = tcp[..., {axis}] - {name}_point(start_{n}_lo, start_{n}_hi, start_{n}_pos)
+    eb = tcp[..., {other}] - start_{n}_pos[{other}]
+    ez = tcp[..., 2] - ({z_expr})
+    return W_REACH * sqrt(ea ** 2 + eb ** 2 + ez ** 2) + W_YAW * 0.5 * wrap_pi(yaw) ** 2 + W_SMOOTH * step_change
+
+
+def {name}_done(tcp, start_{n}_lo, start_{n}_hi, start_{n}_pos, {n}_half):
+    ea = tcp[..., {axis}] - {name}_point(start_{n}_lo, start_{n}_hi, start_{n}_pos)
+    eb = tcp[..., {other}] - start_{n}_pos[{other}]
+    ez = tcp[..., 2] - ({z_expr})
+    return sqrt(ea ** 2 + eb ** 2 + ez ** 2) < {k["reach_tol_m"] * 1.25 if back_m < 0.035 else k["reach_tol_m"]}''', k))
+
+
+def _approach_blind(plan: Plan, name: str, o: ObjectState, k: dict[str, float]) -> None:
+    """No contact strategy: go to the object (its centre); the planner has to find where to touch it."""
+    n = o.name
+    plan.code.append(_sub(f'''def {name}_cost(tcp, yaw, step_change, {n}_pos):
+    return W_REACH * norm(tcp - {n}_pos) + W_YAW * 0.5 * wrap_pi(yaw) ** 2 + W_SMOOTH * step_change
+
+
+def {name}_done(tcp, {n}_pos, {n}_half):
+    return norm(tcp - {n}_pos) < max({n}_half) + 0.03''', k))
+
+
+def _touch_term(o: ObjectState, contact: bool, weight: str) -> tuple[str, str]:
+    """(parameters, expression) pulling the TCP to the stage's contact region, or to the object without one."""
+    if contact:
+        return "contact", f"{weight} * contact"
+    return f"{o.name}_pos", f"{weight} * norm(tcp - {o.name}_pos)"
+
+
+def _push(plan: Plan, o: ObjectState, fixture: str, axis: int, sign: float, k: dict[str, float],
+          contact: bool) -> None:
+    n = o.name
+    region = None
+    if contact:
+        plan.regions.append(back_face(o, axis, sign, None, k["push_z_m"] + 0.006, k))
+        region = len(plan.regions) - 1
+        _approach(plan, "approach", o, axis, sign, f"start_{n}_lo[2] + {k['push_z_m']}", 0.03, k)
+    else:
+        _approach_blind(plan, "approach", o, k)
+    other = 1 - axis
+    p, touch = _touch_term(o, contact, "W_CONTACT")
+    plan.code.append(_sub(f'''def push_gap({n}_lo, {n}_hi, {fixture}_lo, {fixture}_hi):
+    return {_gap(n, fixture, axis, sign)}
+
+
+def push_cost(tcp, yaw, step_change, {p}, {n}_lo, {n}_hi, {n}_pos, {n}_vel, start_{n}_pos, {fixture}_lo, {fixture}_hi):
+    """Slide it to the fixture: low on its back face, straight, not too fast."""
+    gap = push_gap({n}_lo, {n}_hi, {fixture}_lo, {fixture}_hi)
+    drift = abs({n}_pos[..., {other}] - start_{n}_pos[{other}])
+    fast = relu(abs({n}_vel[..., {axis}]) - {k["push_speed_m_s"]})
+    return (W_GAP * relu(gap) + {touch} + 5.0 * drift + 20.0 * fast + W_YAW * 0.5 * wrap_pi(yaw) ** 2
+            + W_SMOOTH * step_change)
+
+
+def push_done({n}_lo, {n}_hi, {n}_vel, {fixture}_lo, {fixture}_hi):
+    return logical_and(push_gap({n}_lo, {n}_hi, {fixture}_lo, {fixture}_hi) < 0.002, norm({n}_vel) < 0.02)''', k))
+    plan.stages += [
+        StageSpec(name="approach", cost="approach_cost", done="approach_done", grip="closed", timeout_s=_t(k, 4.0)),
+        StageSpec(name="push", cost="push_cost", done="push_done", grip="closed", region=region, hold_s=0.3,
+                  timeout_s=_t(k, 5.0)),
+    ]
+    where = "low on the face turned away from it (it slides rather than tips)" if contact else "(no contact region)"
+    plan.why.append(f"'{o.label}' is pushed against '{fixture}' with the closed fingers {where}.")
+
+
+def _press(plan: Plan, o: ObjectState, fixture: str, axis: int, sign: float, force: float, k: dict[str, float],
+           contact: bool) -> None:
+    n = o.name
+    p, touch = _touch_term(o, contact, "W_PRESS_CONTACT")
+    hold = k["hold_press_s"]
+    plan.code.append(_sub(f'''def press_cost(force, step_change, {p}, tcp, {n}_lo, {n}_hi, {fixture}_lo, {fixture}_hi):
+    """The target force, in units of a newton: a wrong force costs in proportion, so letting go never pays."""
+    miss = abs({sign} * force[..., {axis}] - {force})
+    gap = push_gap({n}_lo, {n}_hi, {fixture}_lo, {fixture}_hi)
+    return W_FORCE * miss + {touch} + 100.0 * relu(gap) + W_SMOOTH * step_change
+
+
+def press_done(force, {n}_lo, {n}_hi, {fixture}_lo, {fixture}_hi):
+    ok = abs({sign} * force[..., {axis}] - {force}) < {k["force_tol_n"]}
+    return logical_and(ok, push_gap({n}_lo, {n}_hi, {fixture}_lo, {fixture}_hi) < 0.002)''', k))
+    plan.stages.append(StageSpec(name="press", cost="press_cost", done="press_done", grip="closed",
+                                 region=(len(plan.regions) - 1) if contact else None, hold_s=hold + 0.5,
+                                 timeout_s=hold + 4.0, press_n=sign * force, press_axis=axis, noise_scale=0.15))
+    plan.why.append(f"Then press with {force:g} N for {hold:g} s (force feedback at the inner rate, a small "
+                    "sampling noise for fine regulation).")
+
+
+def _tilt_code(n: str, deg: float) -> str:
+    return f"{n}_up[..., 2] < {math.cos(math.radians(deg)):.6f}"
+
+
+def _withdraw(plan: Plan, o: ObjectState, axis: int, sign: float, deg: float, k: dict[str, float], dz: float) -> None:
+    n = o.name
+    d = ["0.0", "0.0"]
+    d[axis] = f"{-sign * 0.06}"
+    plan.code.append(_sub(_hold_code("withdraw_cost", dx=d[0], dy=d[1], dz=str(dz)), k))
+    plan.code.append(f'''def withdraw_done(tcp, start_tcp, {n}_up, {n}_vel, {n}_spin):
+    ex = tcp[..., 0] - start_tcp[0] - {d[0]}
+    ey = tcp[..., 1] - start_tcp[1] - {d[1]}
+    ez = tcp[..., 2] - start_tcp[2] - {dz}
+    away = sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.015
+    still = logical_and(norm({n}_vel) < 0.01, {n}_spin < 0.2)
+    return logical_and(logical_and(away, still), {_tilt_code(n, deg)})''')
+    plan.stages.append(StageSpec(name="withdraw", cost="withdraw_cost", done="withdraw_done", grip="closed",
+                                 timeout_s=_t(k, 3.0)))
+
+
+def _tip_cost(plan: Plan, name: str, o: ObjectState, edge: float, width: float, contact: bool,
+              k: dict[str, float]) -> None:
+    n = o.name
+    p, touch = _touch_term(o, contact, "W_CONTACT")
+    plan.code.append(_sub(f'''def {name}_cost(yaw, step_change, tcp, {p}, {n}_up):
+    """Turn the object's up axis down; while it still stands, stay on the high contact region."""
+    up = {n}_up[..., 2]
+    standing = 1.0 / (1.0 + exp(-(up - {edge}) / {width / 3:.6f}))
+    return W_TIP * up + {touch} * standing + W_YAW * 0.5 * wrap_pi(yaw) ** 2 + W_SMOOTH * step_change''', k))
+
+
+def _tip(plan: Plan, o: ObjectState, axis: int, sign: float, k: dict[str, float], contact: bool) -> None:
+    n = o.name
+    region = None
+    if contact:
+        plan.regions.append(back_face(o, axis, sign, k["push_height"], 0.0, k))
+        region = len(plan.regions) - 1
+        _approach(plan, "approach", o, axis, sign, f"start_{n}_lo[2] + {k['push_height']} * 2.0 * {n}_half[2]",
+                  0.04, k)
+    else:
+        _approach_blind(plan, "approach", o, k)
+    _tip_cost(plan, "tip", o, 0.75, 0.1, contact, k)
+    plan.code.append(f'''def tip_done({n}_up):
+    return {_tilt_code(n, k["tip_deg"])}''')
+    plan.stages += [
+        StageSpec(name="approach", cost="approach_cost", done="approach_done", grip="closed", timeout_s=_t(k, 4.0)),
+        StageSpec(name="tip", cost="tip_cost", done="tip_done", grip="closed", region=region, timeout_s=_t(k, 5.0)),
+    ]
+    _withdraw(plan, o, axis, sign, k["flip_deg"], k, 0.06)
+    _settle(plan, "settle", 0.3, "closed", k)
+    plan.why.append(f"'{o.label}' stands taller than it is wide: push it high on its back "
+                    f"({'at ' + str(k['push_height']) + ' of its height' if contact else 'no contact region'}) "
+                    f"until it tips past {k['tip_deg']:g} deg, then draw the hand back and let it settle.")
+
+
+def _pivot(plan: Plan, o: ObjectState, fixture: str, axis: int, sign: float, k: dict[str, float],
+           contact: bool) -> None:
+    n = o.name
+    _push(plan, o, fixture, axis, sign, {**k, "timeout_scale": k["timeout_scale"]}, contact)
+    plan.stages[-1] = plan.stages[-1].model_copy(update={"hold_s": 0.2})
+    plan.why.pop()
+    region = None
+    if contact:
+        plan.regions.append(back_face(o, axis, sign, k["push_height"], 0.0, k))
+        region = len(plan.regions) - 1
+        _approach(plan, "rise", o, axis, sign, f"start_{n}_lo[2] + {k['push_height']} * 2.0 * {n}_half[2]",
+                  0.035, k)
+    else:
+        _approach_blind(plan, "rise", o, k)
+    _tip_cost(plan, "pivot", o, 0.5, 0.2, contact, k)
+    plan.code.append(f'''def pivot_done({n}_up):
+    return {_tilt_code(n, k["pivot_deg"])}''')
+    plan.stages += [
+        StageSpec(name="rise", cost="rise_cost", done="rise_done", grip="closed", timeout_s=_t(k, 4.0)),
+        StageSpec(name="pivot", cost="pivot_cost", done="pivot_done", grip="closed", region=region,
+                  timeout_s=_t(k, 6.0)),
+    ]
+    _withdraw(plan, o, axis, sign, k["flip_deg"], k, 0.05)
+    _settle(plan, "settle", 0.3, "closed", k)
+    plan.why.append(f"'{o.label}' lies flat and '{fixture}' stops its far edge: push it against '{fixture}', "
+                    f"then push high on its back so it pivots over the fixture past {k['pivot_deg']:g} deg "
+                    "(past upright, so it does not fall back), withdraw and let it settle.")
