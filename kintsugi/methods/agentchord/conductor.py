@@ -2,14 +2,19 @@
 
 From the start node it takes the cheapest nominal edge to the goal (`next_edge`), runs its atomic actions
 (a `move_to_obj` goes to its keyframe, re-solved with the latest features just before it runs, warm-started
-from the compiled one), and evaluates the edge's monitors (Eq. 12) on the features after every atomic action.
-When one fires, the pre-compiled recovery edge it maps to (Eq. 13) starts with the very next command: its
-chain of recovery edges runs to the merge node, the failed edge's monitors are read once more there (a
-recovery that did not hold is run again, up to `max_recoveries`), and nominal execution continues.
+from the compiled one), and evaluates the edge's monitors (Eq. 12).
 
-The sampling period is one atomic action: `TabletopRobot.execute` runs an action to completion and offers
-no per-tick callback to a method, so monitors read the settled state after each action, and a window of W
-control steps (shorter than one sample) is met by one violated sample.
+Two sampling rates, by what a monitor reads:
+- proprioceptive monitors (gripper opening, finger-pad touch: a drop, a missed grasp) are evaluated every
+  control step through the robot's per-step observer hook, on `GripSense` (encoders and pads, no images),
+  with their persistence window W in control steps; a firing interrupts the running action in that control
+  step and the pre-compiled recovery edge it maps to (Eq. 13) issues the next command;
+- monitors over perceived object features (drift, upright, slip by centroid) are evaluated on full
+  perception after every atomic action (a sub-goal sample; one violated sample meets their window), since a
+  render per control step would cost far more than the step itself.
+A recovery's chain runs to its merge node; the failed edge's monitors are read once more there (a recovery
+that did not hold is run again, up to `max_recoveries`), and nominal execution continues. Recovery latency is
+measured in control steps from the firing to the recovery's first command (`Metrics.recovery_latency_steps`).
 """
 
 from __future__ import annotations
@@ -24,14 +29,18 @@ from kintsugi.config import StrictModel
 from kintsugi.errors import KintsugiError
 from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes
 from kintsugi.methods.agentchord.observe import features
+from kintsugi.taskgraph.features import Features
 from kintsugi.taskgraph.forward import cost_to_go, next_edge
 from kintsugi.taskgraph.model import Edge, TaskGraph
 from kintsugi.taskgraph.monitor import Firing, MonitorBank
 from kintsugi.trial import SkillLog, TrialLog
 
 
-SETTLE_M = 0.001
-"""Two reads of every watched centroid this close (about 0.1 s apart): the objects are at rest."""
+SETTLE_M = 0.0003
+"""Two reads of every watched centroid this close (about 0.1 s apart)... (renders are deterministic, so a
+still object reads the same twice; a bottle rocking on its base after a drop moves its centroid ~1 mm)"""
+SETTLE_DEG = 0.2
+"""...and of every watched principal axis this close in angle: the objects are at rest."""
 SETTLE_READS = 2
 """Consecutive still pairs required (one pair can alias with a rocking object's period)."""
 SETTLE_TRIES = 25
@@ -61,6 +70,13 @@ class Metrics:
     """Per recovery: control steps from the monitor's firing to the recovery's first command."""
     firings: list[str] = field(default_factory=list)
     keyframe_solves: int = 0
+    fired_at: int | None = None
+    """Control step of the latest firing whose recovery has not issued its first command yet."""
+
+
+def proprioceptive(check: Any) -> bool:
+    """A check that reads only the arms' own sensors (no perceived object geometry): per-control-step."""
+    return all(role == "arm" or feature is None for _, role, feature in check.refs())
 
 
 def _objects_of(edge: Edge) -> set[str]:
@@ -87,6 +103,7 @@ class Conductor:
         self.after_action: Callable[[Edge, int], bool] | None = None
         """Optional check after each atomic action (edge, index) -> failed? (the re-planning baselines' verifier)."""
         self.ctg = cost_to_go(graph)
+
         self.arms = {a.args.get("arm") for e in graph.edges for a in e.actions if isinstance(a.args.get("arm"), str)}
 
     # --- running ------------------------------------------------------------------
@@ -126,26 +143,60 @@ class Conductor:
 
     def run_edge(self, edge: Edge, with_monitors: bool) -> Firing | None:
         self.log.status(f"{edge.kind} {edge.id}")
-        bank = None
         objs = _objects_of(edge)
-        if with_monitors and edge.monitors:
-            # One sample per atomic action: see the module docstring for why W becomes 1.
-            once = [m.model_copy(update={"window": 1}) for m in edge.monitors]
-            bank = MonitorBank(once, features(self.robot, objs))
-        for i, action in enumerate(edge.actions):
-            self._execute(edge, action.name, dict(action.args))
-            if with_monitors and self.after_action is not None and self.after_action(edge, i):
-                return Firing("verifier", "verify_failed", None, float("nan"), i)
-            if bank is not None:
-                firing = bank.step(features(self.robot, objs))
-                if firing is not None:
+        monitors = list(edge.monitors) if with_monitors else []
+        observers = getattr(self.robot, "step_observers", None)
+        per_step = [m for m in monitors if observers is not None and proprioceptive(m.check)]
+        # Sub-goal samples: one per atomic action, so one violated sample meets the window.
+        sampled = [m.model_copy(update={"window": 1}) for m in monitors if m not in per_step]
+        start = features(self.robot, objs) if sampled else None
+        bank = MonitorBank(sampled, start) if sampled else None
+        fired: list[tuple[Firing, int]] = []
+        watch = self._step_watch(per_step, fired) if per_step else None
+        if watch is not None:
+            observers.append(watch)
+        try:
+            for i, action in enumerate(edge.actions):
+                self._execute(edge, action.name, dict(action.args))
+                if fired:
+                    firing, self.metrics.fired_at = fired[0]
                     self._fired(edge, firing)
                     return firing
+                if with_monitors and self.after_action is not None and self.after_action(edge, i):
+                    self.metrics.fired_at = self.robot_steps()
+                    return Firing("verifier", "verify_failed", None, float("nan"), i)
+                if bank is not None:
+                    firing = bank.step(features(self.robot, objs))
+                    if firing is not None:
+                        self.metrics.fired_at = self.robot_steps()
+                        self._fired(edge, firing)
+                        return firing
+        finally:
+            if watch is not None:
+                observers.remove(watch)
         return None
+
+    def _step_watch(self, monitors: list, fired: list) -> Callable[[Any], bool]:
+        """The per-control-step observer: Eq. 12 over `GripSense`; True (interrupt the action) on a firing."""
+        bank = MonitorBank(monitors)
+        arms = sorted({e for m in monitors for e, role, _ in m.check.refs() if role == "arm"})
+        sense = self.robot.grip_sense
+
+        def watch(step: Any) -> bool:
+            if fired:
+                return True
+            firing = bank.step(Features(arms={a: sense(a) for a in arms}))
+            if firing is None:
+                return False
+            fired.append((firing, step.index))
+            return True
+        return watch
+
+    def robot_steps(self) -> int:
+        return int(getattr(self.robot, "control_steps", 0))
 
     def _backtrack(self, failed: Edge, firing: Firing) -> str:
         """The latest nominal node before the failed edge whose constraints hold now (the start always does)."""
-        self.metrics.recovery_latency_steps.append(0)
         arms = [e for m in failed.monitors for e, role, _ in m.check.refs() if role == "arm"]
         chain = self._nominal_path()
         upto = chain[: chain.index(failed.source) + 1]
@@ -174,6 +225,7 @@ class Conductor:
             return None
         firing = MonitorBank(bound).step(features(self.robot, _objects_of(edge)))
         if firing is not None:
+            self.metrics.fired_at = self.robot_steps()
             self._fired(edge, firing)
         return firing
 
@@ -191,7 +243,6 @@ class Conductor:
         """The recovery chain from the failure context to its merge node; returns the merge node."""
         g = self.graph
         edge = g.edge(firing.recovery)
-        self.metrics.recovery_latency_steps.append(0)  # the chain's first command is the next one issued
         self._settle(failed, edge)
         while True:
             self.run_edge(edge, with_monitors=False)
@@ -218,12 +269,21 @@ class Conductor:
         for _ in range(SETTLE_TRIES):
             self._execute(edge, "open_gripper", {"arm": arm})
             now = self.robot.features(objs)
-            pts = np.array([now[k].centroid for k in sorted(objs) if now[k].centroid is not None])
-            moved = prev is None or pts.shape != prev.shape or not np.all(np.linalg.norm(pts - prev, axis=1) < SETTLE_M)
+            seen = [now[k] for k in sorted(objs) if now[k].centroid is not None]
+            pts = np.array([f.centroid for f in seen])
+            axes = [None if f.axis is None else np.asarray(f.axis, dtype=float) for f in seen]
+            moved = prev is None or pts.shape != prev[0].shape or not np.all(np.linalg.norm(pts - prev[0], axis=1) < SETTLE_M)
+            if not moved:
+                for a, b in zip(axes, prev[1]):
+                    if (a is None) != (b is None):
+                        moved = True
+                    elif a is not None:
+                        cos = abs(float(a @ b)) / max(float(np.linalg.norm(a) * np.linalg.norm(b)), 1e-12)
+                        moved = moved or np.degrees(np.arccos(min(1.0, cos))) > SETTLE_DEG
             still = 0 if moved else still + 1
             if still >= SETTLE_READS:
                 return True
-            prev = pts
+            prev = (pts, axes)
         return False
 
     def _execute(self, edge: Edge, name: str, args: dict) -> None:
@@ -232,6 +292,9 @@ class Conductor:
         call = {"action": name, **args}
         if name == "move_to_obj" and len(edge.actions) == 1:
             call = self._keyframe_call(edge, call)
+        if self.metrics.fired_at is not None:  # the first command after a firing: detection -> recovery
+            self.metrics.recovery_latency_steps.append(self.robot_steps() - self.metrics.fired_at)
+            self.metrics.fired_at = None
         result = self.robot.execute(call)
         self.metrics.actions += 1
         self.metrics.episode_steps += result.steps // self.steps_per_tick
@@ -241,7 +304,8 @@ class Conductor:
         self.log.skill(SkillLog(skill=call["action"], goal=goal, terminal={a: round(v * 1000, 2) for a, v in zip("xyz", tcp)},
                                 reached=result.reached, recovery=edge.kind == "recovery", message=result.message,
                                 sim_time=round(self.robot.sim_time, 4)))
-        flag = "reached" if result.reached else ("IK FAILED" if result.ik_failed else "not reached")
+        flag = ("reached" if result.reached else "IK FAILED" if result.ik_failed
+                else "interrupted" if getattr(result, "interrupted", False) else "not reached")
         tag = "[magenta]recovery[/magenta] " if edge.kind == "recovery" else ""
         self.log.say(f"[dim]{self.robot.sim_time:6.2f}s[/dim] {tag}{escape(edge.id)}: [bold]{escape(call['action'])}"
                      f"[/bold] -> {flag} ({escape(result.message)})", markup=True)

@@ -125,11 +125,14 @@ class Replanning:
         return conductor.goal_holds(), None
 
     def _settle(self, conductor: Conductor, edge: Edge) -> None:
-        """Let a dropped object come to rest before the next observation is planned from (as AgentChord does)."""
-        conductor.metrics.recovery_latency_steps.append(0)
+        """Let a dropped object come to rest before the next observation is planned from (as AgentChord does).
+        Recovery latency runs from the detection to the re-planned graph's first command, so it includes this."""
+        m = conductor.metrics
+        fired_at, m.fired_at = (m.fired_at if m.fired_at is not None else conductor.robot_steps()), None
         arm = next((a.args["arm"] for a in edge.actions if isinstance(a.args.get("arm"), str)), None)
         if arm is not None:
             conductor.wait_still(arm, set(self.ctx.task.objects), edge)
+        m.fired_at = fired_at
 
     def _remember(self, node: str) -> None:
         from kintsugi.methods.agentchord.domain import TABLETOP_DOMAIN
