@@ -132,8 +132,9 @@ def arm_actuators_xml(robot: RobotSection, arm: str) -> str:
         out.append(f'<position name="{p}{j}" joint="{p}{j}" kp="{robot.kp[i]:.6g}" dampratio="1" '
                    f'ctrlrange="{f(lo, hi)}" forcerange="{f(-t, t)}"/>')
     g = robot.grip_force_n
+    g_open = g if robot.gripper_open_force_n is None else robot.gripper_open_force_n
     out.append(f'<position name="{p}grip" tendon="{p}grip" kp="{robot.gripper_kp:.6g}" '
-               f'ctrlrange="0 {robot.gripper_max_opening_m:.6g}" forcerange="{f(-g, g)}"/>')
+               f'ctrlrange="0 {robot.gripper_max_opening_m:.6g}" forcerange="{f(-g_open, g)}"/>')
     return "\n    ".join(out)
 
 

@@ -47,6 +47,9 @@ class RobotSection(StrictModel):
     """Torsional friction of the finger pads (condim 4), as a length."""
     flange_to_grasp_m: float = Field(0.085, gt=0.03)
     """Flange to the grasp point between the finger pads (the tool centre point)."""
+    gripper_open_force_n: float | None = Field(None, gt=0)
+    """Force limit of the opening stroke; None: the same as grip_force_n. A weak opening lets a
+    pinched cloth go without flinging it."""
     pad_shape: Literal["capsule", "box"] = "capsule"
     """Collision shape of the finger pads: a capsule along the approach axis (rigid objects), or the
     pad's full box (a flat jaw, for pinching cloth)."""
