@@ -167,6 +167,11 @@ class TabletopRobot:
             gripper_opening_m=w.gripper_opening(arm), gripper_closed=w.gripper_commanded_closed(arm),
             touching=touching, pad_force_n=force)
 
+    def joint_command_deg(self, arm: str) -> tuple[float, ...]:
+        """The joint position targets this robot's controller is commanding now (its own output, not a
+        measurement): what a trajectory logger records as the action of a control step."""
+        return tuple(float(v) for v in np.degrees(self._world.joint_targets(arm)))
+
     def grip_sense(self, arm: str) -> GripSense:
         """Proprioception and finger-pad touch only: cheap enough to read every control step."""
         w = self._world

@@ -95,7 +95,10 @@ class TabletopTask:
                 raise ConfigError(f"targets.{name}.relative_to is {rel!r}, which is not in task {self.name}; "
                                   f"its objects: {', '.join(self.spec.objects)}")
 
-    def run(self, spec: TrialSpec, echo: Callable[[str], None] | None = None) -> TrialRecord:
+    def run(self, spec: TrialSpec, echo: Callable[[str], None] | None = None,
+            attach: Callable[[TabletopRobot, TrialLog], None] | None = None) -> TrialRecord:
+        """`attach` (optional) is given the robot and the trial log before the method starts: an outside
+        observer such as the trajectory exporter adds its step observer there; it must not act."""
         import kintsugi.methods.builtin  # noqa: F401 - registers the built-in methods
 
         start = time.perf_counter()
@@ -119,6 +122,8 @@ class TabletopTask:
                     recorder.verdict = verdict
 
         log = TrialLog(echo=echo, on_status=on_status)
+        if attach is not None:
+            attach(robot, log)
         error = None
         framework_success = False
         try:
