@@ -88,6 +88,62 @@ def explain_record(rec: TrialRecord, console: Console) -> None:
         _print_call(call, console)
     for e in events:
         _print_event(e, console)
+    _print_coral(rec, console)
     verdict = "SUCCESS" if rec.success else "FAILURE"
     console.print(f"[bold]ground truth {verdict}[/bold], framework {'success' if rec.framework_success else 'failure'}"
                   + escape(f", error: {rec.error}" if rec.error else ""))
+
+
+def _beliefs(b: dict | None) -> str:
+    if not b:
+        return "-"
+    return ", ".join(f"{k} {v.get('mass_kg', float('nan')):.4g} kg / friction {v.get('friction', float('nan')):.3g}"
+                     for k, v in b.items())
+
+
+def _print_coral(rec: TrialRecord, console: Console) -> None:
+    """CoRAL's attempts (details.method.attempts): priors, the cost code and contact regions each attempt ran,
+    the adaptation's reasoning and the beliefs before and after it. Model-written code is shown as text."""
+    method = rec.details.get("method") if isinstance(rec.details, dict) else None
+    if not isinstance(method, dict) or not isinstance(method.get("attempts"), list):
+        return
+    console.rule("[bold]CoRAL attempts[/bold]")
+    console.print(Text(f"priors (role priors): {_beliefs(method.get('priors'))}"))
+    console.print(Text(f"plan from: {method.get('plan_from', '?')}"
+                       + (f"; memory {json.dumps(method['memory'])}" if method.get("memory") else "")))
+    previous = None
+    for a in method["attempts"]:
+        if not isinstance(a, dict):
+            continue
+        head = (f"attempt {a.get('attempt')}: {'reached' if a.get('reached') else 'failed'}"
+                f"; beliefs {_beliefs(a.get('beliefs_before'))}"
+                f"; cost code {a.get('code_ms_per_step', '?')} ms per planning step of "
+                f"{a.get('mppi_ms_per_step', '?')} ms")
+        console.print(Text(head, style="bold"))
+        stages = a.get("stages") or []
+        console.print(Text("stages: " + " -> ".join(
+            f"{s.get('name')}[cost={s.get('cost')}, done={s.get('done')}, grip={s.get('grip')}"
+            + (f", region={s.get('region')}" if s.get("region") is not None else "")
+            + (f", press={s.get('press_n')} N" if s.get("press_n") is not None else "") + "]" for s in stages)))
+        for i, r in enumerate(a.get("regions") or []):
+            console.print(Text(f"region {i}: {r.get('object')} centre {r.get('center')} normal {r.get('normal')} "
+                               f"radius {r.get('radius')} m"))
+        source = a.get("source") or ""
+        if source != previous:
+            console.print(Panel(Text(source), title=f"cost code (attempt {a.get('attempt')})"))
+        else:
+            console.print(Text("cost code: unchanged"))
+        previous = source
+        if a.get("cost_error"):
+            console.print(Text(f"cost code error: {a['cost_error']}", style="red"))
+        if a.get("sysid"):
+            s = a["sysid"]
+            console.print(Text(f"sysid: {s.get('object')} {s.get('mass_kg', 0):.4g} kg, friction {s.get('friction', 0):.3g}"
+                               f" over {s.get('windows')} windows (loss {s.get('loss_prior', 0):.3g} -> "
+                               f"{s.get('loss_fit', 0):.3g})"))
+        if a.get("adaptation"):
+            console.print(Panel(Text(str(a["adaptation"])), title="adaptation (role adapt)"))
+            if a.get("adaptation_notes"):
+                console.print(Text("checks: " + "; ".join(map(str, a["adaptation_notes"]))))
+            if a.get("beliefs_after"):
+                console.print(Text(f"beliefs {_beliefs(a.get('beliefs_before'))} -> {_beliefs(a.get('beliefs_after'))}"))

@@ -168,11 +168,16 @@ def check_adaptation(reply: AdaptReply, req: AdaptRequest, samples: int, steps: 
     program = None
     plan = current
     if changed:
-        plan = FormulationReply(source=reply.source if reply.source is not None else req.source,
-                                stages=reply.stages if reply.stages is not None else req.stages,
-                                regions=reply.regions if reply.regions is not None else req.regions,
-                                knobs=reply.knobs if reply.knobs is not None else req.knobs,
-                                reasoning=reply.diagnosis[:4000])
+        try:
+            plan = FormulationReply(source=reply.source if reply.source is not None else req.source,
+                                    stages=reply.stages if reply.stages is not None else req.stages,
+                                    regions=reply.regions if reply.regions is not None else req.regions,
+                                    knobs=reply.knobs if reply.knobs is not None else req.knobs,
+                                    reasoning=reply.diagnosis[:4000])
+        except ValidationError as exc:
+            first = exc.errors()[0]
+            raise BadReply(f"adaptation's rewritten plan invalid at {'.'.join(map(str, first['loc']))}: "
+                           f"{first['msg']}"[:300]) from None
         plan, program, found = check_formulation(plan, req.scene, samples, steps, limits)
         notes += found
     return reply.model_copy(update={"beliefs": beliefs}), plan, program, notes

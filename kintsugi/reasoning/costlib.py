@@ -26,7 +26,7 @@ DEFAULT_KNOBS: dict[str, float] = {
     "clear_m": 0.025, "lift_m": 0.12, "carry_z_m": 0.14, "set_down_m": 0.004, "touch_n": 2.0,
     "push_z_m": 0.008, "push_height": 0.7, "paddle_m": 0.01, "push_speed_m_s": 0.08,
     "tip_deg": 45.0, "pivot_deg": 100.0, "flip_deg": 75.0, "reach_tol_m": 0.012, "force_tol_n": 0.4,
-    "timeout_scale": 1.0, "hold_press_s": 3.0,
+    "timeout_scale": 1.0, "hold_press_s": 2.0,
 }
 """Weights (cost units per metre, newton, radian) and thresholds the skills are written with."""
 

@@ -219,24 +219,39 @@ def check_stages(stages: list[StageSpec], program: CostProgram, regions: list[Re
     return out
 
 
-def check_code(source: str, stages: list[StageSpec], req: FormulationRequest, samples: int, steps: int,
-               limits: ProbeLimits = ProbeLimits()) -> CostProgram:
-    """Compile once, then probe every stage function in the child: costs on (K, T) rollouts, done and grip
-    functions on one measured state. Any failure is a BadReply quoting the sandbox's message."""
-    variables = request_variables(req)
+_PROBED: dict[tuple, str | None] = {}
+"""(source, variables, shapes, limits) -> the probe's refusal or None: the probe is deterministic for the same code
+and sample inputs (seeded), so a repeated source (a memory recall, a fuzz campaign) is probed once per process."""
+
+
+def compile_code(source: str, req: FormulationRequest) -> CostProgram:
     try:
-        program = CostProgram.compile(source, variables)
-        costs = sorted({s.cost for s in stages if program.has(s.cost)})
-        states = sorted({s.done for s in stages if program.has(s.done)}
-                        | {s.grip for s in stages if isinstance(s.grip, str) and program.has(s.grip)}
-                        | {s.keep for s in stages if s.keep and program.has(s.keep)})
-        if costs:
-            probe(source, variables, {c: (samples, steps) for c in costs}, sample_env(req, (samples, steps)), limits)
-        if states:
-            probe(source, variables, {c: () for c in states}, sample_env(req, ()), limits)
+        return CostProgram.compile(source, request_variables(req))
     except SandboxError as exc:
         raise BadReply(f"cost code refused ({exc.kind}): {exc}"[:600]) from None
-    return program
+
+
+def probe_code(program: CostProgram, stages: list[StageSpec], req: FormulationRequest, samples: int, steps: int,
+               limits: ProbeLimits = ProbeLimits()) -> None:
+    """Probe every stage function in the limited child: costs on (K, T) rollouts, done, grip and keep functions
+    on one measured state. Any failure is a BadReply quoting the sandbox's message."""
+    variables = request_variables(req)
+    costs = sorted({s.cost for s in stages})
+    states = sorted({s.done for s in stages} | {s.grip for s in stages if isinstance(s.grip, str) and program.has(s.grip)}
+                    | {s.keep for s in stages if s.keep})
+    key = (program.source, frozenset(variables), tuple(costs), tuple(states), samples, steps, limits)
+    if key not in _PROBED:
+        try:
+            probe(program.source, variables, {c: (samples, steps) for c in costs}, sample_env(req, (samples, steps)),
+                  limits)
+            probe(program.source, variables, {c: () for c in states}, sample_env(req, ()), limits)
+            _PROBED[key] = None
+        except SandboxError as exc:
+            _PROBED[key] = f"cost code refused ({exc.kind}): {exc}"[:600]
+        if len(_PROBED) > 256:
+            _PROBED.pop(next(iter(_PROBED)))
+    if _PROBED[key] is not None:
+        raise BadReply(_PROBED[key])
 
 
 def check_formulation(reply: FormulationReply, req: FormulationRequest, samples: int, steps: int,
@@ -248,8 +263,9 @@ def check_formulation(reply: FormulationReply, req: FormulationRequest, samples:
         reply = reply.model_copy(update={"regions": [], "stages": [s.model_copy(update={"region": None})
                                                                     for s in reply.stages]})
     regions = check_regions(reply.regions, req, notes)
-    program = check_code(reply.source, reply.stages, req, samples, steps, limits)
+    program = compile_code(reply.source, req)
     stages = check_stages(reply.stages, program, regions, req, notes)
+    probe_code(program, stages, req, samples, steps, limits)
     knobs = {k: v for k, v in reply.knobs.items() if math.isfinite(v)}
     return reply.model_copy(update={"regions": regions, "stages": stages, "knobs": knobs}), program, notes
 

@@ -53,6 +53,7 @@ class Coral:
         self.ctx, self.variant = ctx, variant
         self.attempts: list[dict[str, Any]] = []
         self.info: dict[str, Any] = {"variant": variant.name}
+        self._now = 0.0
 
     # --- building the requests --------------------------------------------------------------------------------
     def scene_request(self, obs: Any, priors: dict[str, Any]) -> Any:
@@ -150,6 +151,7 @@ class Coral:
                 continue
             if fitter is None:
                 fitter = self._fitter(planning)
+            self._now = robot.sim_time
             sysid = self._sysid(fitter, exec_log, beliefs, planning, log)
             history = self._history(attempt, result, trace, exec_log, error)
             beliefs, plan, program = self._adapt(reasoner, req, beliefs, plan, program, history, sysid, planning,
@@ -190,9 +192,9 @@ class Coral:
         try:
             phys, fit = fitter.fit()
         except KintsugiError as exc:
-            log.event(planning.data.time, "sysid", f"no fit: {exc}"[:200])
+            log.event(self._now, "sysid", f"no fit: {exc}"[:200])
             return None
-        log.event(planning.data.time, "sysid", f"{added} new windows ({len(fitter.logs)} in all): {obj} "
+        log.event(self._now, "sysid", f"{added} new windows ({len(fitter.logs)} in all): {obj} "
                   f"{phys.mass_kg:.3f} kg, friction {phys.friction:.3f} (loss {fit.prior_loss:.3g} -> {fit.loss:.3g})")
         return SysIdSummary(object=obj, mass_kg=phys.mass_kg, friction=phys.friction, loss_prior=fit.prior_loss,
                             loss_fit=fit.loss, windows=len(fitter.logs))
@@ -246,14 +248,14 @@ class Coral:
             reply, new_plan, new_program, notes = ask_adaptation(reasoner, areq, samples, steps)
         except ReasoningError as exc:
             record["adaptation"] = f"error: {exc}"[:400]
-            log.event(planning.data.time, "adapt", f"no usable adaptation ({exc}); next attempt unchanged"[:300])
+            log.event(self._now, "adapt", f"no usable adaptation ({exc}); next attempt unchanged"[:300])
             planning.set_beliefs({k: Physics(mass_kg=v.mass_kg, friction=v.friction) for k, v in beliefs.items()})
             return beliefs, plan, program
         new_beliefs = reply.beliefs if reply.beliefs is not None else beliefs
         planning.set_beliefs({k: Physics(mass_kg=v.mass_kg, friction=v.friction) for k, v in new_beliefs.items()})
         record.update(adaptation=reply.diagnosis, adaptation_notes=notes, beliefs_after=_dump(new_beliefs),
                       code_changed=new_program is not None)
-        log.event(planning.data.time, "adapt", reply.diagnosis[:300])
+        log.event(self._now, "adapt", reply.diagnosis[:300])
         return new_beliefs, new_plan, new_program or program
 
     # --- memory -------------------------------------------------------------------------------------------------
