@@ -38,7 +38,10 @@ class Scripted:
     def run(self, robot: Any, log: TrialLog) -> bool:
         first = robot.observation(images=False)
         all_reached = True
-        for action in self.ctx.task.script(first):
+        from kintsugi.tasks.tabletop.task import expand
+
+        actions = (a for entry in self.ctx.task.script(first) for a in expand(entry, robot))
+        for action in actions:
             log.status(describe(action))
             result = robot.execute(action)
             arm = result.arms[0] if result.arms else "right"

@@ -2,7 +2,8 @@
 
 `perception.objects = "perceived"` (default): seg + depth renders of the top and front
 cameras -> fused per-object clouds -> `kintsugi.perception.features` (centroid, PCA
-axis, extremes, uprightness, fitted to the object's known primitive).
+axis, extremes, uprightness, fitted to the object's known primitive); a cloth (flex)
+-> its cloud's centroid, PCA axis and four corners (`cloth.corner_features`).
 `perception.objects = "truth"`: the same `ObjectFeatures`, computed from the
 simulator's object poses (the paper's simulation setting), marked `note="ground truth"`.
 """
@@ -12,10 +13,12 @@ from __future__ import annotations
 import math
 from typing import Iterable
 
+import mujoco
 import numpy as np
 
 from kintsugi.perception.features import ObjectFeatures, features, object_clouds, render_view, sign_normalized
 from kintsugi.perception.primitives import Fit
+from kintsugi.tasks.tabletop.cloth import cloud_corners, corner_features, truth_corner_features
 from kintsugi.tasks.tabletop.objects import Shape
 from kintsugi.tasks.tabletop.scene import CAMERAS
 from kintsugi.tasks.tabletop.world import GroundTruth, TabletopWorld
@@ -34,14 +37,22 @@ class ObjectPerception:
     def features(self, names: Iterable[str] | None = None) -> dict[str, ObjectFeatures]:
         """Features of the named objects (all by default): fitting costs per object, so ask for few."""
         wanted = [k for k in self._world.objects if names is None or k in set(names)]
+        cloths = {i: k for i, k in self._world.flexes.items() if names is None or k in set(names)}
         if self.mode == "truth":
             truth = self._world.ground_truth()
-            return truth_features(truth.model_copy(update={"objects": {k: truth.objects[k] for k in wanted}}),
-                                  self._shapes)
+            out = truth_features(truth.model_copy(update={"objects": {k: truth.objects[k] for k in wanted}}),
+                                 self._shapes)
+            return out | {k: truth_corner_features(k, self._world.flex_vertices(i), self._world.flex_side(i))
+                          for i, k in cloths.items()}
         w = self._world
         views = [render_view(w.seg_depth_renderer, w.data, cam) for cam in CAMERAS]
         clouds = object_clouds(views, {k: self._geoms[k] for k in wanted})
-        return {k: features(k, clouds[k], self._shapes[k].primitive(), views=views) for k in wanted}
+        out = {k: features(k, clouds[k], self._shapes[k].primitive(), views=views) for k in wanted}
+        if cloths:  # a cloth: its flex pixels (objtype FLEX), corners from the cloud's footprint
+            flex_clouds = object_clouds(views, {k: {i} for i, k in cloths.items()}, objtype=int(mujoco.mjtObj.mjOBJ_FLEX))
+            for k, cloud in flex_clouds.items():
+                out[k] = corner_features(k, cloud, cloud_corners(cloud) if len(cloud) >= 10 else {})
+        return out
 
 
 def truth_features(truth: GroundTruth, shapes: dict[str, Shape]) -> dict[str, ObjectFeatures]:

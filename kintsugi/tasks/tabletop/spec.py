@@ -27,8 +27,10 @@ class Scorer(Protocol):
     def finish(self, world: TabletopWorld) -> tuple[bool, StrictModel]: ...
 
 
-Script = Callable[[Any], list[dict[str, Any]]]
-"""First `Observation` -> the nominal sequence of action dicts (no checks, no recovery)."""
+Script = Callable[[Any], list[Any]]
+"""First `Observation` -> the nominal sequence of action dicts (no checks, no recovery). An entry may
+instead be a callable `Observation -> dict | list[dict]`, expanded with a fresh observation when
+its turn comes (`task.expand`)."""
 
 
 @dataclass(frozen=True)

@@ -151,12 +151,22 @@ class TabletopTask:
         )
 
 
+def expand(entry: object, robot: TabletopRobot) -> list:
+    """A script entry as actions: a dict is one action; a callable (a step whose targets depend on
+    where things are by then, e.g. a cloth the grasp dragged) is given a fresh observation."""
+    if callable(entry):
+        out = entry(robot.observation(images=False))
+        return out if isinstance(out, list) else [out]
+    return [entry]
+
+
 def run_script(task: TabletopTask, condition: str, seed: int, overrides: dict | None = None) -> TabletopWorld:
     """Build a trial's world and run the task's scripted sequence on it (no method, no record)."""
     world, _, drop, _ = task.build(task.config(overrides or {}), condition, seed)
     robot = TabletopRobot(world, hook=drop)
-    for action in task.spec.script(robot.observation(images=False)):
-        robot.execute(action)
+    for entry in task.spec.script(robot.observation(images=False)):
+        for action in expand(entry, robot):
+            robot.execute(action)
     return world
 
 

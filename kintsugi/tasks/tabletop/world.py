@@ -205,6 +205,15 @@ class TabletopWorld:
         q = self.data.qpos[self.arms[arm].finger_qpos]
         return float(self.cfg.robot.gripper_max_opening_m - q.sum())
 
+    def flex_vertices(self, flex: int) -> np.ndarray:
+        """(n, 3) world positions of a flex's vertices (ground truth: scoring and the truth option)."""
+        a, n = self.model.flex_vertadr[flex], self.model.flex_vertnum[flex]
+        return self.data.flexvert_xpos[a:a + n].copy()
+
+    def flex_side(self, flex: int) -> int:
+        """Vertices per side of a square grid flex."""
+        return int(round(float(np.sqrt(self.model.flex_vertnum[flex]))))
+
     def gripper_commanded_closed(self, arm: str) -> bool:
         return self._grip_ctrl[arm] > 0.0
 
