@@ -23,6 +23,7 @@ from kintsugi.tasks.tabletop.context import TabletopContext
 from kintsugi.tasks.tabletop.robot import TabletopRobot
 from kintsugi.tasks.tabletop.scene import CAMERAS
 from kintsugi.tasks.tabletop.spec import Scorer, TaskSpec
+from kintsugi.tasks.tabletop.suites import SUITES
 from kintsugi.tasks.tabletop.world import TabletopWorld
 from kintsugi.trial import TrialLog, TrialRecord, TrialSpec
 from kintsugi.video import VideoRecorder
@@ -50,6 +51,8 @@ class TabletopTask:
     """The method that proves the task (contract tests run it)."""
     method_tag = METHOD_TAG
     default_conditions = ("none", "pose", "drop")
+    suites = SUITES
+    """Named campaigns (`kintsugi bench <task> --suite table1`): AgentChord's Table I cells."""
 
     def __init__(self, spec: TaskSpec) -> None:
         self.spec = spec
