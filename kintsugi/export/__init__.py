@@ -1,0 +1,151 @@
+"""Recovery trajectory export for policy learning (AgentChord IV-E): chosen trials of a campaign, re-run with
+a recorder, written as a LeRobot v2.1 dataset or a robomimic HDF5 file with nominal/recovery segment labels.
+
+`export_campaign` is what `kintsugi export` calls. Each chosen trial is re-run from its recorded spec
+(trials are deterministic per seed) and checked against its record (`replay.compare`); a trial that does
+not reproduce is refused by name, never exported.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Callable, Literal
+
+import kintsugi
+from kintsugi.errors import ConfigError, KintsugiError
+from kintsugi.export.select import parse_filter
+from kintsugi.trial import TrialSpec
+
+Format = Literal["lerobot", "hdf5"]
+MANIFEST = "export.json"
+
+
+@dataclass
+class Exported:
+    key: str
+    frames: int
+    control_steps: int
+    recovered: bool
+    success: bool
+    seconds: float
+    """Wall time of the re-run with recording and writing."""
+
+
+@dataclass
+class ExportReport:
+    out: Path
+    path: Path | None
+    exported: list[Exported] = field(default_factory=list)
+    refused: list[tuple[str, str]] = field(default_factory=list)
+
+
+def _check_out(out: Path) -> None:
+    from kintsugi.outputs import check_output_dir
+
+    check_output_dir(out, "export directory")
+    if out.exists() and any(out.iterdir()):
+        raise ConfigError(f"export directory {out} is not empty; choose a new --out (an export is never merged "
+                          "into an older one)")
+
+
+def export_campaign(campaign_dir: str | Path, fmt: Format, out: str | Path, trials: str | None = None,
+                    fps: float = 10.0, on_trial: Callable[[str, str], None] | None = None) -> ExportReport:
+    """Export the trials of `campaign_dir` that `trials` keeps; raise KintsugiError before any re-run on bad
+    input (unknown format, bad filter, no match, a task that is not tabletop, a non-embedded reasoner)."""
+    import time
+
+    from kintsugi.campaign.bootstrap import bootstrap
+    from kintsugi.campaign.store import ResultStore
+    from kintsugi.export.replay import frame_stride, replay
+    from kintsugi.tasks import TASKS
+
+    if fmt not in ("lerobot", "hdf5"):
+        raise ConfigError(f"unknown export format {fmt!r}; known: hdf5, lerobot")
+    _dependencies(fmt)
+    out = Path(out)
+    store = ResultStore(campaign_dir)
+    cfg = store.load_config()
+    records = store.read()
+    if not records:
+        raise KintsugiError(f"{store.results_path} holds no trial record; run the campaign first")
+    filt = parse_filter(trials)
+    chosen = [r for r in records if filt.keeps(r)]
+    if not chosen:
+        raise KintsugiError(f"no trial of {campaign_dir} matches --trials {filt.text!r} ({len(records)} recorded, "
+                            f"e.g. {records[0].key})")
+    bootstrap(cfg.plugins, cfg.task)
+    entry = TASKS.get(cfg.task)
+    if "tabletop" not in entry.tags:
+        raise ConfigError(f"export re-runs tabletop (system B) trials; task {cfg.task!r} is not one")
+    if cfg.reasoner.backend != "embedded":
+        raise ConfigError(f"export re-runs each trial, and the {cfg.reasoner.backend!r} reasoner's replies are not "
+                          "replayed from the record; export supports campaigns on the embedded reasoner")
+    task = entry.factory()
+    frame_stride(1.0 / task.config(cfg.overrides).sim.control_dt_s, fps)
+    _check_out(out)
+    source = {"campaign": str(Path(campaign_dir).resolve()), "task": cfg.task, "filter": filt.text,
+              "config": cfg.model_dump(mode="json")}
+    report = ExportReport(out=out, path=None)
+    writer = None
+    try:
+        for r in chosen:
+            spec = TrialSpec(task=r.task, method=r.method, variant=r.variant, condition=r.condition, seed=r.seed,
+                             overrides=cfg.overrides, reasoner=cfg.reasoner)
+            start = time.perf_counter()
+            try:
+                ep = replay(spec, r, fps)
+            except KintsugiError as exc:
+                report.refused.append((r.key, str(exc)))
+                if on_trial is not None:
+                    on_trial(r.key, f"refused: {exc}")
+                continue
+            if writer is None:
+                out.mkdir(parents=True, exist_ok=True)
+                writer = _writer(fmt, out, source)
+            writer.add(ep)
+            done = Exported(ep.key, ep.length, ep.control_steps, bool(ep.recovery.any()), ep.success,
+                            round(time.perf_counter() - start, 3))
+            report.exported.append(done)
+            if on_trial is not None:
+                on_trial(r.key, f"{done.frames} frames ({done.control_steps} control steps)"
+                                f"{', recovery' if done.recovered else ''}, {done.seconds:.1f} s")
+    except BaseException:
+        if writer is not None:
+            writer.abort()
+        raise
+    if writer is None:
+        reasons = "; ".join(f"{k}: {why}" for k, why in report.refused)
+        raise KintsugiError(f"no trial could be exported ({reasons})")
+    report.path = writer.close()
+    manifest = {"kintsugi_version": kintsugi.__version__, "format": fmt, "fps": fps, **source,
+                "exported": [vars(e) for e in report.exported],
+                "refused": [{"key": k, "reason": why} for k, why in report.refused]}
+    (out / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n")
+    return report
+
+
+def _dependencies(fmt: Format) -> None:
+    """Fail before any re-run when the format's optional library is missing."""
+    if fmt == "hdf5":
+        from kintsugi.export.hdf5 import _h5py
+
+        _h5py()
+    else:
+        from kintsugi.export.lerobot import _pyarrow
+
+        _pyarrow()
+
+
+def _writer(fmt: Format, out: Path, source: dict):  # noqa: ANN202 - either writer
+    if fmt == "hdf5":
+        from kintsugi.export.hdf5 import Hdf5Writer
+
+        return Hdf5Writer(out, source)
+    from kintsugi.export.lerobot import LeRobotWriter
+
+    return LeRobotWriter(out, source)
+
+
+__all__ = ["ExportReport", "Exported", "export_campaign"]
