@@ -363,6 +363,33 @@ def graph(
     console.print(escape("picture: " + ", ".join(str(p) for p in [png, *paths])))
 
 
+@app.command()
+def export(
+    campaign: Annotated[Path, typer.Argument(help="campaign directory (campaign.json + results.jsonl)")],
+    format_: Annotated[Literal["lerobot", "hdf5"], typer.Option("--format", help="lerobot (v2.1 layout) or hdf5 "
+                                                                "(robomimic layout)")],
+    out: Annotated[Path, typer.Option(help="new (or empty) directory to write the dataset into")],
+    trials: Annotated[Optional[str], typer.Option(help="which trials, e.g. 'method=agentchord,condition=drop,"
+                                                  "seed=0-9,recovered' (fields task method variant condition key "
+                                                  "seed; flags recovered nominal success failed ok)")] = None,
+    fps: Annotated[float, typer.Option(help="frames per second (must divide the control rate)")] = 10.0,
+) -> None:
+    """Re-run chosen trials with a recorder and write observations, actions and nominal/recovery segment labels
+    for policy learning. A trial whose re-run differs from its record is refused by name (exit 1)."""
+    from kintsugi.export import export_campaign
+
+    try:
+        rep = export_campaign(campaign, format_, out, trials, fps,
+                              on_trial=lambda key, what: console.print(escape(f"{key}: {what}")))
+    except KintsugiError as exc:
+        _fail(exc)
+        return
+    console.print(escape(f"exported {len(rep.exported)} trials ({sum(e.frames for e in rep.exported)} frames) to "
+                         f"{rep.path}"))
+    if rep.refused:
+        _fail(f"{len(rep.refused)} trials refused: " + "; ".join(f"{k}: {why}" for k, why in rep.refused), code=1)
+
+
 def main() -> None:  # pragma: no cover
     app()
 
