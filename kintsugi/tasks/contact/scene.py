@@ -52,7 +52,7 @@ def _effector(cfg: ContactConfig) -> tuple[str, str]:
             f'<body name="{name}" gravcomp="1">'
             f'<joint name="{name}" type="slide" axis="0 {sgn} 0" range="0 {half_open:.6g}" damping="2" armature="0.01"/>'
             f'<geom name="{name}" type="box" size="{_f(fw / 2, ft / 2, fl / 2)}" pos="{_f(0, sgn * ft / 2, fl / 2)}" '
-            f'mass="{e.finger_mass_kg:.6g}" friction="{e.pad_friction:.6g} 0.01 0.0001" condim="4" priority="2" '
+            f'mass="{e.finger_mass_kg:.6g}" friction="{e.pad_friction:.6g} {e.pad_torsion_m:.6g} 0.0001" condim="4" priority="2" '
             f'rgba="{PAD_RGBA}"/>'
             f'<site name="pad_{name[-1]}" type="box" size="{_f(fw / 2 + 0.001, 0.004, fl / 2 + 0.001)}" '
             f'pos="{_f(0, 0, fl / 2)}" rgba="0 0 0 0"/>'

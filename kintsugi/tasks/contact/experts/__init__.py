@@ -10,12 +10,13 @@ from typing import Callable
 
 from kintsugi.errors import ConfigError
 from kintsugi.tasks.contact.context import ContactContext
-from kintsugi.tasks.contact.experts import flipping, picking, placing, pushing
+from kintsugi.tasks.contact.experts import boards, flipping, picking, placing, pushing
 from kintsugi.tasks.contact.fsm import StageFactory
 
 Design = Callable[[ContactContext], list[StageFactory]]
 
 EXPERTS: dict[str, tuple[Design, Design]] = {
+    "push-pick-board": (boards.push_pick_board_single, boards.push_pick_board_fsm),
     "pick-box": (picking.pick_box_single, picking.pick_box_fsm),
     "push-force": (pushing.push_force_single, pushing.push_force_fsm),
     "pick-clutter": (placing.pick_clutter_single, placing.pick_clutter_fsm),
