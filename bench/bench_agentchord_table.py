@@ -1,10 +1,17 @@
 """Table I figures of a system-B campaign (one results.jsonl): per method, ground-truth success with a Wilson
 95 % interval, mean episode steps, sim time, execution time (sim + measured reasoning), modelled execution
 time (sim + calls x 5 s), reasoning calls after planning, recoveries, recovery latency (firing -> first
-recovery command), and detection delay (a drop -> the monitor's firing or the replan, in 10 ms control steps;
-monitors are read after each atomic action, so this is the rest of the action in which the drop happened).
+recovery command), and detection delay (a drop -> the monitor's firing or the replan, in 10 ms control steps:
+monitors that read the pads run every control step, so for them it is about the persistence window; checks
+made by a verifier at sub-goals see the drop only when the action ends).
 
     .venv/bin/python bench/bench_agentchord_table.py runs/<campaign> [more campaigns...]
+    .venv/bin/python bench/bench_agentchord_table.py --run [--tasks pour-single,...] [--suites table1,...]
+        [--workers 2] [--trials N]   # run (or resume) the suites per task into runs/table1/<task>-<suite>
+
+`--run` is Table I in one command: for every task and suite (`table1` = p 0.10, `table1-p05` = p 0.05,
+every method, 20 trials) it runs `kintsugi bench <task> --suite <suite>` (resumable: finished trials are
+kept), then prints the table of all of them. Latency steps = the largest recovery latency seen.
 """
 
 from __future__ import annotations
@@ -34,8 +41,37 @@ def detection_delays(r) -> list[float]:  # noqa: ANN001 - a TrialRecord
     return out
 
 
+TABLE1_TASKS = ("pour-single", "pour-dual", "rearrange-table", "handover-block", "coffee-tray")
+
+
+def run_suites(argv: list[str]) -> list[str]:
+    import argparse
+    import subprocess
+
+    ap = argparse.ArgumentParser(prog="bench_agentchord_table.py --run")
+    ap.add_argument("--tasks", default=",".join(TABLE1_TASKS))
+    ap.add_argument("--suites", default="table1,table1-p05")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--trials", type=int, default=None)
+    ap.add_argument("--root", default="runs/table1")
+    args = ap.parse_args(argv)
+    kintsugi = str(Path(sys.executable).with_name("kintsugi"))
+    outs = []
+    for task in args.tasks.split(","):
+        for suite in args.suites.split(","):
+            out = f"{args.root}/{task}-{suite}"
+            cmd = [kintsugi, "bench", task, "--suite", suite, "--workers", str(args.workers), "--out", out]
+            if args.trials:
+                cmd += ["--trials", str(args.trials)]
+            print("$", " ".join(cmd[1:]), flush=True)
+            subprocess.run(cmd, check=False, stdout=subprocess.DEVNULL)
+            outs.append(out)
+    return outs
+
+
 def main() -> None:
-    for out in sys.argv[1:]:
+    outs = run_suites(sys.argv[2:]) if sys.argv[1:2] == ["--run"] else sys.argv[1:]
+    for out in outs:
         groups = defaultdict(list)
         for r in iter_records(out):
             groups[(r.condition, r.params.get("drop_p"), r.method)].append(r)

@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from kintsugi.reasoning.composer import arms_named, node_constraints
+from kintsugi.reasoning.composer import arms_named, instructed_ops, node_constraints
 from kintsugi.reasoning.jsontext import BadReply
 from kintsugi.reasoning.symbolic import PlanningError, State, ground, parse_literals, plan
 from kintsugi.reasoning.taskgraph_types import ArrangerReply, ArrangerRequest, SeenObject
@@ -185,7 +185,7 @@ def embedded_arrange(request: ArrangerRequest) -> ArrangerReply:
                             f"none for {missing[0]!r}")
     seen = {o.name: o for o in request.objects}
     arms = arms_named(request.task, [a.name for a in request.arms])
-    ops = ground(request.domain, arms, [o.name for o in request.objects if o.visible])
+    ops = instructed_ops(request.task, request.domain, arms, [o.name for o in request.objects if o.visible])
     wanted = set(request.failure_modes)
     facts = {n.id: _facts(request.node_facts[n.id], request) for n in graph.nodes}
     ctg = cost_to_go(graph)

@@ -75,6 +75,43 @@ def arms_named(task: str, arms: list[str]) -> list[str]:
     return named or list(arms)
 
 
+def arm_bindings(task: str, arms: list[str], objects: list[str]) -> dict[str, str]:
+    """Objects the instruction gives to one arm ("the cup with the left arm", "the bottle with the right
+    hand") -> that arm. "using the right arm" after a phrase names the arm for the whole task (`arms_named`),
+    not for the object before it."""
+    text = task.lower()
+    out = {}
+    for o in objects:
+        for a in arms:
+            if re.search(rf"\b{re.escape(o.lower())}\s+with\s+(the\s+)?{a}\s+(arm|hand)\b", text):
+                out[o] = a
+    return out
+
+
+def held_up(task: str, objects: list[str]) -> list[str]:
+    """Objects the instruction asks to be held up while others act on them ("hold the cup up")."""
+    text = task.lower()
+    return [o for o in objects if re.search(rf"\bhold\s+(the\s+)?{re.escape(o.lower())}\s+up\b", text)]
+
+
+def instructed_ops(task: str, domain: Any, arms: list[str], objects: list[str]) -> list:
+    """The grounded operators the instruction allows: an object given to one arm is taken by that arm only
+    (no instance adds holding(other arm, it)); an object to be held up must be lifted before any operator
+    makes a fact that names it as the target (carry over it, pour into it)."""
+    from dataclasses import replace
+
+    bound, up = arm_bindings(task, arms, objects), held_up(task, objects)
+    out = []
+    for op in ground(domain, arms, objects):
+        if any(a[0] == "holding" and a[2] in bound and bound[a[2]] != a[1] for a in op.add):
+            continue
+        targets = {a[2] for a in op.add if len(a) == 3 and a[1] in objects and a[2] in up}
+        if targets:
+            op = replace(op, pre_pos=op.pre_pos | {("lifted", t) for t in targets})
+        out.append(op)
+    return out
+
+
 def fill(value: Any, binding: dict[str, str], seen: dict[str, SeenObject]) -> Any:
     """Instantiate a template: `?p` -> its value, `$x(?obj)` -> the object's perceived centroid x (y, z),
     `$mirror(?arm, v)` -> v for the right arm, -v for the left; lists and dicts recursively."""
@@ -168,7 +205,8 @@ def embedded_compose(request: ComposerRequest) -> ComposerReply:
     arms = arms_named(request.task, [a.name for a in request.arms])
     initial = observed_facts(request, domain)
     goal = parse_literals(list(request.goal), domain, where="task goal")
-    steps = plan(initial, goal, ground(domain, arms, [o.name for o in request.objects if o.visible]))
+    ops = instructed_ops(request.task, domain, arms, [o.name for o in request.objects if o.visible])
+    steps = plan(initial, goal, ops)
     return build_graph(request.task, domain, initial, steps, seen, goal[0])
 
 
