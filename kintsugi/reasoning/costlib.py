@@ -49,7 +49,7 @@ class NotUnderstood(ValueError):
 
 
 def words(text: str) -> list[str]:
-    return re.findall(r"[a-z0-9.]+", text.lower())
+    return [w.strip(".") for w in re.findall(r"[a-z0-9.]+", text.lower()) if w.strip(".")]
 
 
 def target_object(req: FormulationRequest) -> ObjectState:
@@ -227,8 +227,8 @@ def _pick(plan: Plan, o: ObjectState, others: list[ObjectState], k: dict[str, fl
     fby = rb * cby{distances}
     fit_a = where(2.0 * {n}_half[1] < max_opening - 0.015, 0.0, 1000.0)
     fit_b = where(2.0 * {n}_half[0] < max_opening - 0.015, 0.0, 1000.0)
-    score_a = fit_a - 10.0 * sqrt({nested_min(clear_a)}) + abs(wrap_pi(start_yaw - ya))
-    score_b = fit_b - 10.0 * sqrt({nested_min(clear_b)}) + abs(wrap_pi(start_yaw - yb))
+    score_a = fit_a - 1000.0 * sqrt({nested_min(clear_a)}) + abs(wrap_pi(start_yaw - ya))
+    score_b = fit_b - 1000.0 * sqrt({nested_min(clear_b)}) + abs(wrap_pi(start_yaw - yb))
     side = where(score_a <= score_b, 1.0, -1.0)
     aim = start_yaw - wrap_pi(start_yaw - where(side > 0, ya, yb))'''
     # side = +1: pinch across the object's y (hand yaw = its yaw), -1: across its x. A side must fit the open
