@@ -99,7 +99,7 @@ class LeRobotWriter:
     def add(self, ep: Episode) -> None:
         pa, pq = self._pa, self._pq
         if self._fps is None:
-            self._fps = ep.fps
+            self._fps = int(ep.fps) if float(ep.fps).is_integer() else ep.fps  # LeRobot datasets state int fps
             self._cameras = {c: f.shape[1:] for c, f in ep.images.items()}
         i, t = len(self._episodes), ep.length
         task_index = self._tasks.setdefault(ep.instruction, len(self._tasks))
