@@ -13,10 +13,10 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from kintsugi.tasks.contact.costs import Attractor, View
+from kintsugi.tasks.contact.costs import EPS, Attractor, View
 from kintsugi.tasks.contact.robot import Observation
-from kintsugi.tasks.contact.spec import corners
-from kintsugi.tasks.contact.world import Scene, rotate, up_axis, yaw_of
+from kintsugi.tasks.contact.objects import Geometry
+from kintsugi.tasks.contact.world import Scene, up_axis, yaw_of
 
 
 def static_env(scene: Scene, cfg: Any) -> dict[str, np.ndarray]:
@@ -34,18 +34,43 @@ def static_env(scene: Scene, cfg: Any) -> dict[str, np.ndarray]:
     return env
 
 
-def _bounds(points: np.ndarray, pos: np.ndarray, quat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """World bounding box of an object's corners for poses (..., 3), (..., 4)."""
-    q = np.broadcast_to(quat[..., None, :], (*quat.shape[:-1], len(points), 4))
-    world = pos[..., None, :] + rotate(q, np.broadcast_to(points, (*quat.shape[:-1], *points.shape)))
-    return world.min(axis=-2), world.max(axis=-2)
+def rotation(quat: np.ndarray) -> np.ndarray:
+    """(..., 3, 3) rotation matrices of (..., 4) unit quaternions (w, x, y, z)."""
+    w, x, y, z = (quat[..., i] for i in range(4))
+    return np.stack([
+        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=-1),
+        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=-1),
+        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=-1)], axis=-2)
+
+
+def _bounds(geo: Geometry, pos: np.ndarray, quat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """World bounding box of an object made of boxes, for poses (..., 3), (..., 4): per part, its rotated
+    centre +- |R| @ half extents (exact for boxes; matrix products instead of per-corner rotations)."""
+    rot = rotation(quat)
+    cols = [rot[..., :, j] for j in range(3)]
+    abscols = [np.abs(c) for c in cols]
+    lo = hi = None
+    for part in geo.parts:
+        centre = pos + sum(c * v for c, v in zip(cols, part.pos) if v)
+        extent = sum(c * v for c, v in zip(abscols, part.half))
+        lo = centre - extent if lo is None else np.minimum(lo, centre - extent)
+        hi = centre + extent if hi is None else np.maximum(hi, centre + extent)
+    return lo, hi
+
+
+def contact_distance(attractor: Attractor, tcp: np.ndarray, pos: np.ndarray, quat: np.ndarray) -> np.ndarray:
+    """Distance from the TCP to the nearest of the region's candidate targets, carried by the object's pose."""
+    rot = rotation(quat)
+    pts = attractor.targets  # (J, 3), object frame
+    d = (tcp - pos)[..., None, :] - sum(rot[..., None, :, j] * pts[:, j, None] for j in range(3))
+    return (np.sqrt((d * d).sum(axis=-1) + EPS * EPS) - EPS).min(axis=-1)  # the smooth norm of Attractor.distance
 
 
 def entry_env(obs: Observation, scene: Scene) -> dict[str, np.ndarray]:
     """The `start_*` constants of a stage, from the state it began in."""
     env = {"start_tcp": obs.ee[:3].copy(), "start_yaw": np.asarray(float(obs.ee[3]))}
     for name, o in obs.objects.items():
-        lo, hi = _bounds(corners(scene.geometry[name]), o.pos, o.quat)
+        lo, hi = _bounds(scene.geometry[name], o.pos, o.quat)
         env.update({f"start_{name}_pos": o.pos.copy(), f"start_{name}_yaw": np.asarray(float(yaw_of(o.quat))),
                     f"start_{name}_lo": lo, f"start_{name}_hi": hi})
     return env
@@ -83,12 +108,11 @@ def rollout_env(view: View, scene: Scene, fixed: Mapping[str, np.ndarray], attra
         "step_change": lambda: _step_change(view.ctrl),
     }
     for name in scene.geometry:
-        pts = corners(scene.geometry[name])
         box: dict[str, tuple[np.ndarray, np.ndarray]] = {}
 
-        def bounds(n: str = name, p: np.ndarray = pts, memo: dict = box) -> tuple[np.ndarray, np.ndarray]:
+        def bounds(n: str = name, memo: dict = box) -> tuple[np.ndarray, np.ndarray]:
             if "b" not in memo:
-                memo["b"] = _bounds(p, view.pos(n), view.quat(n))
+                memo["b"] = _bounds(scene.geometry[n], view.pos(n), view.quat(n))
             return memo["b"]
 
         makers.update({
@@ -97,7 +121,8 @@ def rollout_env(view: View, scene: Scene, fixed: Mapping[str, np.ndarray], attra
             f"{name}_lo": (lambda b=bounds: b()[0]), f"{name}_hi": (lambda b=bounds: b()[1]),
         })
     if attractor is not None:
-        makers["contact"] = lambda: attractor.distance(view)
+        obj = attractor.region.obj
+        makers["contact"] = lambda: contact_distance(attractor, view.tcp, view.pos(obj), view.quat(obj))
     return LazyEnv(fixed, makers)
 
 
@@ -114,7 +139,7 @@ def state_env(obs: Observation, scene: Scene, fixed: Mapping[str, np.ndarray], a
                 "force": obs.force, "touch": obs.touch, "ctrl": obs.ctrl, "tcp_vel": obs.ee_vel[:3],
                 "step_change": np.asarray(0.0), "elapsed": np.asarray(elapsed)})
     for name, o in obs.objects.items():
-        lo, hi = _bounds(corners(scene.geometry[name]), o.pos, o.quat)
+        lo, hi = _bounds(scene.geometry[name], o.pos, o.quat)
         env.update({f"{name}_pos": o.pos, f"{name}_vel": o.lin_vel, f"{name}_up": up_axis(o.quat),
                     f"{name}_yaw": np.asarray(float(yaw_of(o.quat))), f"{name}_lo": lo, f"{name}_hi": hi,
                     f"{name}_spin": np.asarray(float(np.linalg.norm(o.ang_vel)))})

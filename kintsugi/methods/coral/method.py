@@ -29,6 +29,14 @@ from kintsugi.errors import KintsugiError, ReasoningError
 from kintsugi.trial import TrialLog
 
 
+def probe_limits() -> Any:
+    """The sandbox's limits, with a longer wall-clock allowance: on a loaded machine a child process can take
+    seconds just to start; CPU time and memory stay the sandbox's defaults."""
+    from kintsugi.sandbox import ProbeLimits
+
+    return ProbeLimits(wall_s=60.0)
+
+
 @dataclass(frozen=True)
 class Variant:
     name: str
@@ -119,7 +127,7 @@ class Coral:
         if memory is not None:
             plan, program, beliefs = self._recall(memory, req, beliefs, samples, steps, log, obs.t)
         if plan is None:
-            plan, program, notes = ask_formulation(reasoner, req, samples, steps)
+            plan, program, notes = ask_formulation(reasoner, req, samples, steps, probe_limits())
             self.info["plan_from"] = "formulation"
             if notes:
                 log.event(obs.t, "formulation", "; ".join(notes))
@@ -245,7 +253,7 @@ class Coral:
                             history=[*[type(history).model_validate(h) for h in past[:-1]], history][-5:],
                             sysid=sysid, refine_strategy=True)
         try:
-            reply, new_plan, new_program, notes = ask_adaptation(reasoner, areq, samples, steps)
+            reply, new_plan, new_program, notes = ask_adaptation(reasoner, areq, samples, steps, probe_limits())
         except ReasoningError as exc:
             record["adaptation"] = f"error: {exc}"[:400]
             log.event(self._now, "adapt", f"no usable adaptation ({exc}); next attempt unchanged"[:300])
@@ -286,7 +294,7 @@ class Coral:
                                       stages=[StageSpec.model_validate(s) for s in meta.get("stages", [])],
                                       regions=_rescale(best.episode, req), knobs=meta.get("knobs", {}),
                                       reasoning=f"memory episode {best.id} (score {best.score:.2f})")
-            plan, program, _ = check_formulation(stored, req, samples, steps)
+            plan, program, _ = check_formulation(stored, req, samples, steps, probe_limits())
         except (BadReply, ValueError) as exc:
             log.event(t, "memory", f"episode {best.id} unusable ({exc}); formulating instead"[:300])
             return None, None, beliefs
