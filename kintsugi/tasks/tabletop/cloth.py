@@ -26,6 +26,11 @@ from kintsugi.tasks.tabletop.scene import SceneExtra
 
 TOWEL = "towel"
 CORNERS = ("bottom_left", "bottom_right", "top_left", "top_right")
+FLAT_BAND_M = 0.006
+"""Cloud points within this of the lowest count as the cloth lying flat."""
+CORNER_BAND_M = 0.003
+CLOUD_POINTS = 20000
+"""A cloth's cloud keeps this many points (the default thinning would drop corner pixels)."""
 
 
 class TowelSection(StrictModel):
@@ -135,17 +140,29 @@ def _named_corners(points: np.ndarray) -> dict[str, np.ndarray]:
     return out
 
 
-def cloud_corners(cloud: np.ndarray) -> dict[str, np.ndarray]:
-    """The towel's four corners from its perceived cloud: the minimum-area rectangle around the
-    cloud's footprint (fitted to all its boundary points, finer than one pixel's quantization)
-    gives each corner's x, y; its height is that of the cloud point nearest it."""
+def cloud_corners(cloud: np.ndarray, pixel_m: float = 0.0) -> dict[str, np.ndarray]:
+    """The towel's four corners from its perceived cloud: of the part lying flat on the table (a
+    pinched, lifted part would skew it), the points extreme along each diagonal of its
+    minimum-area rectangle - the corner directions - averaged over a thin band and moved onto the
+    extreme, then half a pixel (`pixel_m`, the top view's footprint on the table) outwards. A
+    dragged, no longer square towel keeps its true corners this way."""
     import cv2
 
-    xy = cloud[:, :2].astype(np.float32)
-    box = cv2.boxPoints(cv2.minAreaRect(xy))
-    near = [int(np.argmin(np.linalg.norm(cloud[:, :2] - b, axis=1))) for b in box]
-    picks = np.array([[b[0], b[1], cloud[i, 2]] for b, i in zip(box, near)])
-    return _named_corners(picks)
+    flat = cloud[cloud[:, 2] <= cloud[:, 2].min() + FLAT_BAND_M]
+    pts = flat if len(flat) >= 10 else cloud
+    xy = pts[:, :2]
+    rect = cv2.minAreaRect(xy.astype(np.float32))
+    centre = np.array(rect[0], float)
+    picks = []
+    for b in cv2.boxPoints(rect):
+        d = (b - centre) / max(float(np.linalg.norm(b - centre)), 1e-9)
+        t = xy @ d
+        sel = t >= t.max() - CORNER_BAND_M
+        m = xy[sel].mean(axis=0)
+        # the extreme pixel's centre lies up to half a pixel inside the edge along x and y
+        c = m + (t.max() - m @ d + 0.5 * pixel_m * (abs(d[0]) + abs(d[1]))) * d
+        picks.append([c[0], c[1], float(pts[sel, 2].mean())])
+    return _named_corners(np.array(picks))
 
 
 def corner_features(name: str, cloud: np.ndarray, corners: dict[str, np.ndarray], note: str = ""):  # noqa: ANN201

@@ -46,6 +46,7 @@ PLACE_CLEARANCE_M = 0.015
 """Fingertips this far above the towel's folded layer at release (lower presses the cloth and
 traps it under the pads)."""
 RETREAT_M = 0.06
+SLIDE_M = 0.03
 
 
 class FoldSection(StrictModel):
@@ -131,12 +132,26 @@ def _arc(obs: Any, held_at: dict[str, np.ndarray]) -> list[dict[str, Any]]:
             for k in range(ARC_SEGMENTS)]
 
 
+def _slide_off(c: dict[str, np.ndarray], yaw: float, arm: str) -> tuple[float, float, float]:
+    """After the release the cloth's ridge often leans on a pad and would ride up with it: slide the
+    open pads along the ridge, off the folded corner's tip, before lifting. The ridge runs along the
+    corner's diagonal; folded over, the corner's outward diagonal is the grasp's inward one mirrored
+    across the fold line (its component along the towel flips)."""
+    bottom, top = ARM_CORNERS[arm]
+    u = c[top][:2] - c[bottom][:2]
+    u /= np.linalg.norm(u)
+    d_in = np.array([math.cos(yaw), math.sin(yaw)])
+    out = 2 * (d_in @ u) * u - d_in  # outward = -d_in, mirrored: its component along u flips
+    return (float(SLIDE_M * out[0]), float(SLIDE_M * out[1]), 0.003)
+
+
 def script(obs: Any) -> list[Any]:
     """Grasp both bottom corners across their diagonals, fold them over, release, retreat. The
     fold's entry is a callable: the scripted method expands it with a fresh observation."""
     corners = _corners(obs)
     grasp = _grasp_points(corners)
     held_at = {a: corners[ARM_CORNERS[a][0]][:2] - grasp[a][0] for a in grasp}
+    slide = {a: _slide_off(corners, grasp[a][1], a) for a in grasp}
     z = PAD_REACH_M + TIP_CLEARANCE_M
     rot = {a: _rpy(down_rotation(yaw)) for a, (_, yaw) in grasp.items()}
     return [
@@ -146,6 +161,7 @@ def script(obs: Any) -> list[Any]:
         _both(lambda a: {"action": "close_gripper", "arm": a}),
         functools.partial(_arc, held_at=held_at),
         _both(lambda a: {"action": "open_gripper", "arm": a}),
+        _both(lambda a: {"action": "move_by_offset", "arm": a, "dxyz": slide[a]}),
         _both(lambda a: {"action": "move_by_offset", "arm": a, "dxyz": (0.0, 0.0, RETREAT_M)}),
         _both(lambda a: {"action": "back", "arm": a}),
     ]

@@ -18,7 +18,7 @@ import numpy as np
 
 from kintsugi.perception.features import ObjectFeatures, features, object_clouds, render_view, sign_normalized
 from kintsugi.perception.primitives import Fit
-from kintsugi.tasks.tabletop.cloth import cloud_corners, corner_features, truth_corner_features
+from kintsugi.tasks.tabletop.cloth import CLOUD_POINTS, cloud_corners, corner_features, truth_corner_features
 from kintsugi.tasks.tabletop.objects import Shape
 from kintsugi.tasks.tabletop.scene import CAMERAS
 from kintsugi.tasks.tabletop.world import GroundTruth, TabletopWorld
@@ -33,6 +33,9 @@ class ObjectPerception:
         self.mode = world.cfg.perception.objects
         self._geoms = {k: {int(g) for g in np.flatnonzero(world.geom_object == i)} for i, k in enumerate(world.objects)}
         self._shapes = world.shapes
+        cams = world.cfg.cameras
+        self._pixel_m = 2 * cams.top_height_m * math.tan(math.radians(cams.top_fovy_deg) / 2) / cams.height
+        """The top view's pixel footprint on the table (a cloth's corners are pixel-limited)."""
 
     def features(self, names: Iterable[str] | None = None) -> dict[str, ObjectFeatures]:
         """Features of the named objects (all by default): fitting costs per object, so ask for few."""
@@ -49,9 +52,10 @@ class ObjectPerception:
         clouds = object_clouds(views, {k: self._geoms[k] for k in wanted})
         out = {k: features(k, clouds[k], self._shapes[k].primitive(), views=views) for k in wanted}
         if cloths:  # a cloth: its flex pixels (objtype FLEX), corners from the cloud's footprint
-            flex_clouds = object_clouds(views, {k: {i} for i, k in cloths.items()}, objtype=int(mujoco.mjtObj.mjOBJ_FLEX))
+            flex_clouds = object_clouds(views, {k: {i} for i, k in cloths.items()}, objtype=int(mujoco.mjtObj.mjOBJ_FLEX),
+                                        max_points=CLOUD_POINTS)
             for k, cloud in flex_clouds.items():
-                out[k] = corner_features(k, cloud, cloud_corners(cloud) if len(cloud) >= 10 else {})
+                out[k] = corner_features(k, cloud, cloud_corners(cloud, self._pixel_m) if len(cloud) >= 10 else {})
         return out
 
 
