@@ -242,6 +242,8 @@ class FoldTowelTask(TabletopTask):
     """A tabletop task whose scene adds the towel and whose config has the `towel` and `fold` sections."""
 
     config_type = FoldTowelConfig
+    contract_overrides = {"towel.count": 5, "towel.spacing_m": 0.05}
+    """The contract test's short budget: a 5 x 5 cloth, same script (tests/test_fold_towel.py has the real one)."""
 
     def config(self, overrides: dict | list) -> FoldTowelConfig:
         return apply_overrides(FoldTowelConfig(), overrides)
