@@ -78,8 +78,87 @@ def test_clutter_sits_round_the_box_without_touching_it() -> None:
         assert len(setup.scene.geometry) == 1 + TASKS.get("pick-clutter").factory().config({}).clutter.distractors
 
 
-@pytest.mark.parametrize("task", ["pick-box", "pick-clutter", "push-force"])
+@pytest.mark.parametrize("task", ["push-pick-board", "pick-box", "pick-clutter", "push-force", "flip-box", "flip-wall"])
 def test_every_task_has_both_expert_designs(task: str) -> None:
     from kintsugi.tasks.contact.experts import EXPERTS
 
     assert task in EXPERTS
+
+
+def _board_pushed(robot, cfg, setup, overhang_m: float):  # noqa: ANN001, ANN202
+    """Push the board's back edge with the closed fingers (plain servo targets) until the handle overhangs."""
+    from kintsugi.tasks.contact.push_pick_board import overhang
+
+    geo = setup.scene.geometry["board"]
+    b = robot.observe().objects["board"]
+    back = b.pos[0] - geo.parts[0].half[0]
+    robot.act(np.array([back - 0.04, b.pos[1], 0.05, 0, 0]), 0.8)
+    robot.act(np.array([back - 0.03, b.pos[1], 0.004, 0, 0]), 0.6)
+    for _ in range(300):
+        o = robot.observe()
+        b = o.objects["board"]
+        if overhang(b.pos, b.quat, geo, cfg.table.edge_x_m) >= overhang_m:
+            break
+        robot.act(np.array([o.ee[0] + 0.005, b.pos[1], 0.004, 0, 0]), 0.05)
+    o = robot.act(np.array([o.ee[0] - 0.03, o.ee[1], 0.07, 0, 0]), 0.6)
+    return o.objects["board"]
+
+
+def _pinch_handle(robot, cfg, board, z: float) -> None:  # noqa: ANN001
+    """Come down round the handle 3.5 cm past the table edge to fingertip height z, and close."""
+    from kintsugi.tasks.contact.world import yaw_of
+
+    yaw = float(yaw_of(board.quat))
+    s = (cfg.table.edge_x_m + 0.035 - board.pos[0]) / np.cos(yaw)
+    g = board.pos + s * np.array([np.cos(yaw), np.sin(yaw), 0.0])
+    robot.act(np.array([g[0], g[1], 0.07, yaw, 0.09]), 1.0)
+    robot.act(np.array([g[0], g[1], z, yaw, 0.09]), 0.8)
+    robot.act(np.array([g[0], g[1], z, yaw, 0.0]), 0.6)
+
+
+def test_push_pick_board_scores_a_board_lifted_by_its_overhanging_handle() -> None:
+    cfg, world, scorer, setup = _task("push-pick-board")
+    robot = ContactRobot(world, watchers=[scorer.watch])
+    ok, details = scorer.finish(world)
+    assert not ok and details.max_overhang_m < 0 and not details.pinched
+    board = _board_pushed(robot, cfg, setup, 0.095)
+    _pinch_handle(robot, cfg, board, -0.012)
+    o = robot.observe()
+    assert o.ee[2] < -0.005 and o.touch.min() > 5  # below the board's bottom: only possible past the edge
+    for z in np.linspace(-0.012, 0.28, 30):
+        o = robot.act(np.array([*o.ee[:2], z, o.ee[3], 0.0]), 0.05)
+    robot.act(np.array([*o.ee[:3], o.ee[3], 0.0]), 2.0)
+    ok, details = scorer.finish(world)
+    assert ok, details
+    assert details.max_overhang_m >= cfg.scoring.min_overhang_m and details.lowest_z_m >= cfg.scoring.lift_m
+    robot.act(np.array([*o.ee[:3], o.ee[3], 0.09]), 1.5)  # let go: it falls, not held
+    ok, details = scorer.finish(world)
+    assert not ok and not details.pinched
+
+
+def test_push_pick_board_handle_on_the_table_cannot_be_reached_from_below() -> None:
+    cfg, world, scorer, setup = _task("push-pick-board")
+    robot = ContactRobot(world, watchers=[scorer.watch])
+    board = robot.observe().objects["board"]
+    # the same grasp, without the push: the fingers come down on the table behind the edge
+    geo = setup.scene.geometry["board"]
+    tip_x = board.pos[0] + geo.parts[1].pos[0] + geo.parts[1].half[0]
+    robot.act(np.array([tip_x - 0.03, board.pos[1], 0.07, 0, 0.09]), 1.0)
+    o = robot.act(np.array([tip_x - 0.03, board.pos[1], -0.012, 0, 0.09]), 1.0)
+    assert o.ee[2] > -0.002  # the table stops them: no pinch under the board here
+    ok, _ = scorer.finish(world)
+    assert not ok
+
+
+def test_push_pick_board_draws_its_sizes_and_start_from_the_config() -> None:
+    from kintsugi.tasks.contact.push_pick_board import overhang
+
+    for seed in range(4):
+        cfg, world, _, setup = _task("push-pick-board", "random", seed)
+        b = cfg.board
+        p = setup.params
+        assert b.plate_m[0][0] <= p["board.plate_x_m"] <= b.plate_m[0][1]
+        assert b.mass_kg[0] <= setup.truth["board"].mass_kg <= b.mass_kg[1]
+        pos, quat = world.object_pose("board")
+        gap = -float(overhang(pos, quat, setup.scene.geometry["board"], cfg.table.edge_x_m))
+        assert b.gap_m[0] - 0.01 <= gap <= b.gap_m[1] + 0.01  # yaw moves one tip corner a little

@@ -58,7 +58,8 @@ def _step_contact_world(task: str, variant: str, condition: str, seed: int) -> t
     """Build a contact task's evaluation world and drive it with its reference method (MPPI, contacts)."""
     from kintsugi.tasks.contact.task import run_reference
 
-    world = run_reference(TASKS.get(task).factory(), condition, seed)
+    factory = TASKS.get(task).factory()
+    world = run_reference(factory, condition, seed, overrides=dict(factory.contract_overrides))
     world.close()
     assert world.steps > 1000
     return world.model, world.data
@@ -72,7 +73,9 @@ WORLD_STEPPERS: dict[str, Callable[[str, str, int], tuple[mujoco.MjModel, mujoco
 
 
 def _spec(task: str, variant: str, seed: int = 0, condition: str = "all", **kw: Any) -> TrialSpec:
-    method = getattr(TASKS.get(task).factory(), "reference_method", "baseline")
+    factory = TASKS.get(task).factory()
+    method = getattr(factory, "reference_method", "baseline")
+    kw.setdefault("overrides", dict(getattr(factory, "contract_overrides", {})))  # a task's short contract budget
     return TrialSpec(task=task, method=method, variant=variant, condition=condition, seed=seed, **kw)
 
 

@@ -56,9 +56,11 @@ class StagedPlanner:
     """MPPI on a planning world, driven by a stage machine; one instance per attempt."""
 
     def __init__(self, cfg: ContactConfig, planning: PlanningWorld, seed: int, skills_before: int = 0,
-                 show: Callable[[np.ndarray, np.ndarray], None] | None = None) -> None:
+                 show: Callable[[np.ndarray, np.ndarray], None] | None = None,
+                 stats: Callable[[float, str, float, float, float], None] | None = None) -> None:
         self.cfg = cfg
         self._show = show
+        self._stats = stats
         self._skills0 = skills_before
         self.planning = planning
         self._obs: Observation | None = None
@@ -115,6 +117,8 @@ class StagedPlanner:
         tr.cost.append(s.cost_min)
         tr.temperature.append(s.temperature)
         tr.ess_frac.append(s.ess / max(1, s.n_valid))
+        if self._stats is not None:
+            self._stats(obs.t, stage.name, tr.cost[-1], tr.temperature[-1], tr.ess_frac[-1])
         batch = self.mppi.last_batch
         if batch is not None and s.best_index >= 0:
             tr.best_tcp.append(batch.sensor("tcp_pos")[s.best_index].copy())
@@ -141,7 +145,8 @@ def _fmt(goal: dict[str, float]) -> str:
 def run_attempt(cfg: ContactConfig, robot: ContactRobot, planning: PlanningWorld, factories: list[StageFactory],
                 log: TrialLog, seed: int, budget_s: float | None = None) -> tuple[AttemptResult, PlanTrace]:
     """Plan and act through `factories` until they finish or the attempt's time budget runs out."""
-    planner = StagedPlanner(cfg, planning, seed, skills_before=len(log.skills), show=robot.show_plan)
+    planner = StagedPlanner(cfg, planning, seed, skills_before=len(log.skills), show=robot.show_plan,
+                             stats=getattr(robot, "plan_stats", None))
     try:
         result = planner.run(robot, factories, budget_s or cfg.control.episode_s, log)
     finally:

@@ -93,6 +93,8 @@ class ContactRobot:
         self.attempts = 1
         self.show_plan: Callable[[np.ndarray, np.ndarray], None] | None = None
         """Set by a video recorder: the planner passes it the predicted path and contact candidates."""
+        self.plan_stats: Callable[[float, str, float, float, float], None] | None = None
+        """Set by a video recorder: the planner passes it (t, stage, lowest cost, temperature, ESS fraction)."""
         self._steps_per_tick = max(1, round(1.0 / (inner_hz * world.model.opt.timestep)))
         self.inner_dt = self._steps_per_tick * world.model.opt.timestep
         self._watchers = watchers if watchers is not None else []

@@ -31,6 +31,9 @@ class ContactTask:
     conditions = CONDITIONS
     reference_method = "expert-fsm"
     """The method that proves the task (contract tests run it)."""
+    contract_overrides = {"control.samples": 16, "control.episode_s": 2.5}
+    """What the task contract runs with: the real planner and physics on a short budget (16 samples,
+    2.5 s of sim time: >1000 physics steps, the first stages' contacts) instead of whole trials."""
     method_tag = METHOD_TAG
     default_conditions = ("all",)
     """The paper's randomization (`random` draws the same)."""
@@ -84,6 +87,7 @@ class ContactTask:
         watchers = [scorer.watch] + ([recorder.on_tick] if recorder else [])
         robot = ContactRobot(world, watchers=watchers, on_restart=[scorer.reset])
         robot.show_plan = recorder.show_plan if recorder else None
+        robot.plan_stats = recorder.plan_step if recorder else None
         log = TrialLog(echo=echo, on_status=recorder.status if recorder else None)
         error = None
         framework_success = False
@@ -98,6 +102,11 @@ class ContactTask:
         if recorder is not None:
             recorder.finish("ground truth: " + ("SUCCESS" if success else "FAILURE"), success)
             video = str(recorder.save(spec.video)) if recorder.frames else None
+            if video is not None and recorder.series.t:
+                from kintsugi.tasks.contact.plot import plot_path_for, plot_plan
+
+                plot = plot_plan(recorder.series, plot_path_for(video), title=spec.key)
+                log.event(robot.sim_time, "plot", f"planner statistics: {plot}")
         world.close()
         return TrialRecord(
             key=spec.key, task=spec.task, method=spec.method, variant=spec.variant,

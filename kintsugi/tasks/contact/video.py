@@ -2,7 +2,8 @@
 
 Overlays (added to the render's scene as visual-only geoms, never to the physics): the
 current stage's contact-region candidate points (green) and the best rollout's predicted
-tool-centre-point path (yellow). The planner publishes them through `show_plan`.
+tool-centre-point path (yellow). The planner publishes them through `show_plan`, and its per-step
+statistics (cost, temperature, ESS) through `plan_step`: they become a PNG beside the video (plot.py).
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
+from kintsugi.tasks.contact.plot import PlanSeries
 from kintsugi.tasks.contact.world import EvaluationWorld
 from kintsugi.video import VideoRecorder
 
@@ -23,6 +25,10 @@ class ContactVideo(VideoRecorder):
         self._world = world
         self.path = np.zeros((0, 3))
         self.points = np.zeros((0, 3))
+        self.series = PlanSeries()
+
+    def plan_step(self, t: float, stage: str, cost: float, temperature: float, ess_frac: float) -> None:
+        self.series.add(t, stage, cost, temperature, ess_frac)
 
     def show_plan(self, path: np.ndarray, points: np.ndarray) -> None:
         """The best rollout's predicted TCP path (T, 3) and the contact candidates (J, 3), world frame."""

@@ -18,6 +18,7 @@ from kintsugi.tasks.contact.config import PushPickBoardConfig
 from kintsugi.tasks.contact.context import ContactContext
 from kintsugi.tasks.contact.costs import Attractor, ContactRegion, View, norm, smoothness, step_up, total, yaw_error
 from kintsugi.tasks.contact.experts.common import W_SMOOTH, hold_tcp, near, settle
+from kintsugi.tasks.contact.experts.picking import DESCEND_NOISE
 from kintsugi.tasks.contact.objects import Geometry
 from kintsugi.tasks.contact.fsm import Stage, StageFactory
 from kintsugi.tasks.contact.push_pick_board import overhang
@@ -29,7 +30,7 @@ PUSH_Z = 0.004
 PADDLE = 0.01
 PUSH_MARGIN_M = 0.025
 """Pushed this far past the pickable minimum overhang (scoring-independent: the expert's own margin)."""
-GRASP_PAST_EDGE_M = 0.03
+GRASP_PAST_EDGE_M = 0.035
 """The pinch's centre this far beyond the table edge: the fingers (2 cm wide) clear it."""
 GRASP_Z = -0.012
 """Fingertips below the board's bottom: the pads cover the handle's whole thickness."""
@@ -169,7 +170,7 @@ def push_pick_board_fsm(ctx: ContactContext) -> list[StageFactory]:
             return total(run)
 
         return Stage("descend", cost, lambda o: near(o, down, 0.006), grip=opening, timeout_s=3.0,
-                     seed_plan=_seed(down),
+                     seed_plan=_seed(down), noise_scale=DESCEND_NOISE,
                      goal={"z_mm": GRASP_Z * 1000})
 
     def grasp(obs: Observation) -> Stage:

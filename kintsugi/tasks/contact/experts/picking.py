@@ -19,6 +19,8 @@ GRASP_TOUCH_N = 2.0
 LIFT_M = 0.12
 """How high the expert lifts (the task asks for at least scoring.lift_m)."""
 CLEAR_M = 0.025
+DESCEND_NOISE = 0.35
+"""MPPI's noise scale while the open fingers come down round the box."""
 
 
 def grasp_height(ctx: ContactContext, obj: str) -> float:
@@ -66,7 +68,11 @@ def pick_stages(ctx: ContactContext, obj: str) -> list[StageFactory]:
             p = o2.objects[obj].pos
             return near(o2, np.array([p[0], p[1], z_grasp]), 0.008)
 
-        return Stage("descend", cost, done, grip=plan["open"], timeout_s=4.0, goal={"z_mm": z_grasp * 1000})
+        # fine sampling noise and a plan restarted at the grasp point: centimetre jitter here puts a finger
+        # on the box's top edge and shoves it away
+        p = obs.objects[obj].pos
+        return Stage("descend", cost, done, grip=plan["open"], timeout_s=4.0, noise_scale=DESCEND_NOISE,
+                     seed_plan={0: float(p[0]), 1: float(p[1]), 2: z_grasp}, goal={"z_mm": z_grasp * 1000})
 
     def grasp(obs: Observation) -> Stage:
         here = obs.ee[:3].copy()
