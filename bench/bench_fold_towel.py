@@ -4,6 +4,7 @@
 
 (a) Raw `mj_step` steps per wall-second on one core for the towel scene (two arms at home, the
     cloth resting on the table), for the task's cloth (9 x 9) and the contract test's (5 x 5).
+(c) Perceived towel features (seg + depth of both views -> cloud -> corners), per view.
 (b) `fold-towel` with the `scripted` method through `run_trial` (condition `pose`): wall time per
     episode, physics steps, steps/s within the episode (perception and IK included), success.
 Success rates with a Wilson CI come from `kintsugi bench fold-towel` (see the final report).
@@ -36,6 +37,23 @@ def raw_steps_per_s(overrides: dict, steps: int) -> float:
     return steps / dt
 
 
+def features_ms_per_view(repeats: int = 20) -> float:
+    from kintsugi.tasks.tabletop.robot import TabletopRobot
+    from kintsugi.tasks.tabletop.scene import CAMERAS
+
+    task = TASKS.get("fold-towel").factory()
+    world, *_ = task.build(task.config({}), "pose", 0)
+    robot = TabletopRobot(world)
+    robot.features()  # renderer start-up
+    times = []
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        robot.features()
+        times.append(time.perf_counter() - t0)
+    world.close()
+    return 1000 * statistics.median(times) / len(CAMERAS)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--trials", type=int, default=3)
@@ -47,6 +65,7 @@ def main() -> None:
           f"load average {load[0]:.1f} (other work shares the cores: figures are lower bounds)")
     for label, ov in (("9 x 9 (task)", {}), ("5 x 5 (contract test)", {"towel.count": 5, "towel.spacing_m": 0.05})):
         print(f"cloth scene {label}, raw mj_step at rest: {raw_steps_per_s(ov, args.steps):,.0f} steps/s")
+    print(f"towel features from seg+depth (corners), per view: median {features_ms_per_view():.1f} ms")
     walls, sps, ok = [], [], 0
     for seed in range(args.trials):
         r = run_trial(TrialSpec(task="fold-towel", method="scripted", variant="default", condition="pose", seed=seed))
