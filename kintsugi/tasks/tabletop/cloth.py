@@ -141,11 +141,12 @@ def _named_corners(points: np.ndarray) -> dict[str, np.ndarray]:
 
 
 def cloud_corners(cloud: np.ndarray, pixel_m: float = 0.0) -> dict[str, np.ndarray]:
-    """The towel's four corners from its perceived cloud: of the part lying flat on the table (a
-    pinched, lifted part would skew it), the points extreme along each diagonal of its
-    minimum-area rectangle - the corner directions - averaged over a thin band and moved onto the
-    extreme, then half a pixel (`pixel_m`, the top view's footprint on the table) outwards. A
-    dragged, no longer square towel keeps its true corners this way."""
+    """The towel's four corners from its perceived cloud, from the part lying flat on the table (a
+    pinched, lifted part would skew them). Where the cloth fills a corner of its minimum-area
+    rectangle (a flat, square towel), that rectangle corner: fitted to every edge point, it is
+    finer than a pixel. Elsewhere (a dragged, no longer square towel) the points extreme along
+    that diagonal, averaged over a thin band, moved onto the extreme and half a pixel
+    (`pixel_m`, the top view's footprint on the table) outwards."""
     import cv2
 
     flat = cloud[cloud[:, 2] <= cloud[:, 2].min() + FLAT_BAND_M]
@@ -155,6 +156,10 @@ def cloud_corners(cloud: np.ndarray, pixel_m: float = 0.0) -> dict[str, np.ndarr
     centre = np.array(rect[0], float)
     picks = []
     for b in cv2.boxPoints(rect):
+        near = np.linalg.norm(xy - b, axis=1) <= 0.75 * max(pixel_m, 1e-3)
+        if near.any():  # the cloth fills the rectangle's corner: the fit to every edge point is best
+            picks.append([float(b[0]), float(b[1]), float(pts[near, 2].mean())])
+            continue
         d = (b - centre) / max(float(np.linalg.norm(b - centre)), 1e-9)
         t = xy @ d
         sel = t >= t.max() - CORNER_BAND_M

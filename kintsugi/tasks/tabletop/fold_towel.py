@@ -90,10 +90,10 @@ def _corners(obs: Any) -> dict[str, np.ndarray]:
 
 def _grasp_points(c: dict[str, np.ndarray]) -> dict[str, tuple[np.ndarray, float]]:
     """Per arm: grasp point (INSET_M inside its bottom corner, on the diagonal) and the diagonal's heading."""
-    centre = np.mean(list(c.values()), axis=0)[:2]
+    opposite = {"bottom_left": "top_right", "bottom_right": "top_left"}
     out = {}
     for arm, (bottom, _) in ARM_CORNERS.items():
-        diag = centre - c[bottom][:2]
+        diag = c[opposite[bottom]][:2] - c[bottom][:2]  # the whole diagonal: its heading is the least noisy
         diag /= np.linalg.norm(diag)
         out[arm] = (c[bottom][:2] + INSET_M * diag, math.atan2(diag[1], diag[0]))
     return out
