@@ -48,7 +48,8 @@ def _step_tabletop_world(task: str, variant: str, condition: str, seed: int) -> 
     """Build a tabletop task's world directly and run its scripted sequence (grasps included)."""
     from kintsugi.tasks.tabletop.task import run_script
 
-    world = run_script(TASKS.get(task).factory(), condition, seed)
+    factory = TASKS.get(task).factory()
+    world = run_script(factory, condition, seed, dict(getattr(factory, "contract_overrides", {})))
     world.close()
     assert world.steps > 1000
     return world.model, world.data
