@@ -226,7 +226,10 @@ def push_pick_board_single(ctx: ContactContext) -> list[StageFactory]:
             want_open = (1 - close) * (1 - held) * opening
             pick = ((1 - held) * reach + held * 20 * np.maximum(0.0, LIFT_Z - 0.03 - lifted_z)
                     + 200 * (v.ctrl[..., 4] - want_open) ** 2 + yaw_error(v.yaw, yaw_of(v.quat("board"))) ** 2)
-            run = (1 - pickable) * (push(v, y0, yaw0) + 200 * v.ctrl[..., 4] ** 2) + pickable * pick
+            # while pushing, the fingertips stay behind the plate's back edge (never on top of the board)
+            contact = v.to_world("board", attract.targets[:1])[:, :, 0, :]
+            behind = 200 * np.maximum(v.tcp[..., 0] - contact[..., 0] - 0.006, 0.0)
+            run = (1 - pickable) * (push(v, y0, yaw0) + behind + 200 * v.ctrl[..., 4] ** 2) + pickable * pick
             return total(run + W_SMOOTH * smoothness(v))
 
         def done(o2: Observation) -> bool:

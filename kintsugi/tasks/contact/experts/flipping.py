@@ -21,6 +21,8 @@ PUSH_HEIGHT = 0.7
 """Where the fingertips meet the back face, as a fraction of the box's height (high: it tips, not slides)."""
 PADDLE = 0.01
 TIPPED_DEG = 45.0
+PIVOT_DONE_DEG = 125.0
+"""flip-wall: the hand lets go only this far past upright; a box let go near 100 deg can rock back."""
 
 
 def top_region(ctx: ContactContext) -> ContactRegion:
@@ -131,15 +133,24 @@ def flip_wall_fsm(ctx: ContactContext) -> list[StageFactory]:
     def pivot(obs: Observation) -> Stage:
         def cost(v: View) -> np.ndarray:
             up_z = v.up("box")[..., 2]
+            # the hand never needs to pass the curb, and a box flung over it ends off the table
+            reach_over = np.maximum(v.tcp[..., 0] - face - 0.03, 0.0)
+            fling = np.maximum(norm(v.vel("box")) - 0.3, 0.0)
             return total(5 * up_z + 10 * high.distance(v) * step_up(up_z, 0.5, 0.2) + 0.5 * yaw_error(v.yaw, 0.0) ** 2
-                         + W_SMOOTH * smoothness(v))
+                         + 100 * reach_over + 20 * fling + W_SMOOTH * smoothness(v))
 
         # past upright, so it settles over the curb instead of falling back
-        return Stage("pivot", cost, lambda o: float(tilt_deg(o.objects["box"].quat)) > 100.0, grip=0.0,
-                     timeout_s=6.0, attractors=(high,), goal={"tilt_deg": 100.0})
+        return Stage("pivot", cost, lambda o: float(tilt_deg(o.objects["box"].quat)) > PIVOT_DONE_DEG, grip=0.0,
+                     timeout_s=6.0, attractors=(high,), goal={"tilt_deg": PIVOT_DONE_DEG})
+
+    def lift_off(obs: Observation) -> Stage:
+        # straight up first: fingertips resting on the stood-up box would drag it back over the curb
+        up = obs.ee[:3] + np.array([0.0, 0.0, 0.05])
+        return Stage("lift-off", hold_tcp(up, 0.0), lambda o: near(o, up, 0.012), grip=0.0, timeout_s=2.0,
+                     noise_scale=0.4, seed_plan={2: float(up[2])}, goal={"z_mm": up[2] * 1000})
 
     def withdraw(obs: Observation) -> Stage:
-        back = obs.ee[:3] + np.array([-0.06, 0.0, 0.05])
+        back = obs.ee[:3] + np.array([-0.06, 0.0, 0.0])
 
         def done(o: Observation) -> bool:
             b = o.objects["box"]
@@ -148,7 +159,7 @@ def flip_wall_fsm(ctx: ContactContext) -> list[StageFactory]:
 
         return Stage("withdraw", hold_tcp(back, 0.0), done, grip=0.0, timeout_s=3.0, goal={"x_mm": back[0] * 1000})
 
-    return [approach, to_curb, rise, pivot, withdraw, settle("settle", 0.3, grip=0.0)]
+    return [approach, to_curb, rise, pivot, lift_off, withdraw, settle("settle", 0.3, grip=0.0)]
 
 
 def flip_wall_single(ctx: ContactContext) -> list[StageFactory]:
