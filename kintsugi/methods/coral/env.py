@@ -35,12 +35,15 @@ def static_env(scene: Scene, cfg: Any) -> dict[str, np.ndarray]:
 
 
 def rotation(quat: np.ndarray) -> np.ndarray:
-    """(..., 3, 3) rotation matrices of (..., 4) unit quaternions (w, x, y, z)."""
-    w, x, y, z = (quat[..., i] for i in range(4))
-    return np.stack([
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)], axis=-1),
-        np.stack([2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)], axis=-1),
-        np.stack([2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)], axis=-1)], axis=-2)
+    """(..., 3, 3) rotation matrices of (..., 4) unit quaternions (w, x, y, z), written into one array."""
+    q = np.ascontiguousarray(np.moveaxis(quat, -1, 0))
+    w, x, y, z = q
+    xx, yy, zz, xy, xz, yz, wx, wy, wz = x * x, y * y, z * z, x * y, x * z, y * z, w * x, w * y, w * z
+    out = np.empty((*quat.shape[:-1], 3, 3))
+    out[..., 0, 0], out[..., 0, 1], out[..., 0, 2] = 1 - 2 * (yy + zz), 2 * (xy - wz), 2 * (xz + wy)
+    out[..., 1, 0], out[..., 1, 1], out[..., 1, 2] = 2 * (xy + wz), 1 - 2 * (xx + zz), 2 * (yz - wx)
+    out[..., 2, 0], out[..., 2, 1], out[..., 2, 2] = 2 * (xz - wy), 2 * (yz + wx), 1 - 2 * (xx + yy)
+    return out
 
 
 def _bounds(geo: Geometry, pos: np.ndarray, quat: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -62,8 +65,11 @@ def contact_distance(attractor: Attractor, tcp: np.ndarray, pos: np.ndarray, qua
     """Distance from the TCP to the nearest of the region's candidate targets, carried by the object's pose."""
     rot = rotation(quat)
     pts = attractor.targets  # (J, 3), object frame
-    d = (tcp - pos)[..., None, :] - sum(rot[..., None, :, j] * pts[:, j, None] for j in range(3))
-    return (np.sqrt((d * d).sum(axis=-1) + EPS * EPS) - EPS).min(axis=-1)  # the smooth norm of Attractor.distance
+    delta = tcp - pos
+    local = np.einsum("...ji,...j->...i", rot, delta)  # the TCP in the object's frame: R^T (tcp - pos)
+    # |local - p|^2 = |delta|^2 - 2 local.p + |p|^2, one small matrix product for every candidate at once
+    d2 = (delta * delta).sum(axis=-1)[..., None] - 2.0 * (local @ pts.T) + (pts * pts).sum(axis=-1)
+    return (np.sqrt(np.maximum(d2, 0.0) + EPS * EPS) - EPS).min(axis=-1)  # the smooth norm of Attractor.distance
 
 
 def entry_env(obs: Observation, scene: Scene) -> dict[str, np.ndarray]:
