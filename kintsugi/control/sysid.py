@@ -43,6 +43,8 @@ class ParamSpec(StrictModel):
     name: str
     bounds: tuple[float, float]
     against: str | None = None  # friction only: the known surface geom the object slides on
+    also: tuple[str, ...] = ()
+    """Friction only: the object's other geoms, which share the value (an object built of several boxes)."""
 
     @field_validator("bounds")
     @classmethod
@@ -55,6 +57,8 @@ class ParamSpec(StrictModel):
     def _against_friction_only(self) -> ParamSpec:
         if self.against is not None and self.kind != "friction":
             raise ValueError("'against' names the surface of a friction parameter; a mass has none")
+        if self.also and self.kind != "friction":
+            raise ValueError("'also' names further geoms of a friction parameter; a mass is one body's")
         return self
 
     @property
@@ -195,7 +199,8 @@ class _Replay:
     def variant(self, values: np.ndarray, model: mujoco.MjModel | None = None) -> mujoco.MjModel:
         m = model if model is not None else copy.copy(self.model)
         for spec, v in zip(self.problem.params, values):
-            P.set_param(m, spec.kind, spec.name, float(v))
+            for name in (spec.name, *spec.also):
+                P.set_param(m, spec.kind, name, float(v))
         mujoco.mj_setConst(m, self.scratch)
         return m
 

@@ -70,10 +70,13 @@ class BeliefFitter:
         geoms = planning.layout.obj_geoms[obj]
         import mujoco
 
-        self.geom = mujoco.mj_id2name(planning.model, mujoco.mjtObj.mjOBJ_GEOM, int(geoms[0]))
+        names = [mujoco.mj_id2name(planning.model, mujoco.mjtObj.mjOBJ_GEOM, int(g)) for g in geoms]
+        self.geom = names[0]
         self.planning, self.obj = planning, obj
+        # one friction for every box of the object (a board's plate and handle both slide on the table)
         self.params = [ParamSpec(kind="mass", name=obj, bounds=mass_bounds),
-                       ParamSpec(kind="friction", name=self.geom, bounds=friction_bounds, against="table")]
+                       ParamSpec(kind="friction", name=self.geom, bounds=friction_bounds, against="table",
+                                 also=tuple(names[1:]))]
         self.signals = [Signal(sensor=f"{obj}_pos", scale=0.005, bin=5), Signal(sensor="ft_force", scale=1.0, bin=5)]
         sim = planning.cfg.sim
         substeps = max(1, round(sim.planning_timestep_s / sim.timestep_s))
