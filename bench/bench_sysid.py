@@ -9,7 +9,8 @@ read here, by the benchmark, only to score).
 
 Last line: one JSON object with mass_error, friction_error (worst over the trials and
 tasks run), cycles (most used), and per-task figures.
-Usage: .venv/bin/python bench/bench_sysid.py [--tasks push-force,pick-box] [--seeds 0,1,2]
+Usage: .venv/bin/python bench/bench_sysid.py [--tasks push-pick-board,push-force] [--seeds 0,1,2]
+(any contact task works: its `target` object is fitted; T1 and T4 are the issue's targets)
 """
 
 from __future__ import annotations
@@ -79,7 +80,7 @@ def one(task_name: str, seed: int) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--tasks", default="push-force")
+    ap.add_argument("--tasks", default="push-pick-board,push-force")
     ap.add_argument("--seeds", default="0,1,2")
     args = ap.parse_args()
     print("machine:", machine())

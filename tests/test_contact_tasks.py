@@ -53,3 +53,36 @@ def test_a_box_left_on_the_table_is_a_failure_whatever_the_method_says() -> None
     assert not record.success and not record.framework_success
     assert record.details["lowest_z_m"] < 0.01 and not record.details["pinched"]
     assert record.skills and not record.skills[-1].reached
+
+
+def test_every_paper_task_is_registered_with_both_experts() -> None:
+    from kintsugi.tasks.contact.experts import EXPERTS
+
+    paper = {"push-pick-board", "pick-box", "pick-clutter", "push-force", "flip-box", "flip-wall"}
+    assert paper <= set(CONTACT)
+    assert paper <= set(EXPERTS)
+
+
+def test_plan_plot_is_a_png_with_the_three_series(tmp_path) -> None:  # noqa: ANN001
+    from kintsugi.tasks.contact.plot import PlanSeries, plot_path_for, plot_plan
+
+    series = PlanSeries()
+    for i in range(20):
+        series.add(0.1 * i, "push" if i < 10 else "lift", 5.0 / (i + 1), 0.5, 0.1)
+    series.add(2.0, "lift", float("inf"), 0.5, 0.1)  # an all-invalid step is skipped, not plotted as inf
+    out = plot_plan(series, plot_path_for(tmp_path / "trial.mp4"), title="t")
+    assert out.name == "trial.plan.png" and out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    import imageio.v3 as iio
+
+    image = iio.imread(out)
+    assert image.shape[0] > 400 and image.shape[1] > 600
+
+
+def test_a_contact_video_comes_with_its_planner_plot(tmp_path) -> None:  # noqa: ANN001
+    video = tmp_path / "pick.mp4"
+    record = run_trial(TrialSpec(task="pick-box", method="expert-fsm", variant="default", condition="none", seed=0,
+                                 overrides={"control.samples": 8, "control.episode_s": 0.6}, video=str(video)))
+    assert record.error is None, record.error
+    assert record.video and video.exists()
+    plot = tmp_path / "pick.plan.png"
+    assert plot.exists() and any(e.kind == "plot" and str(plot) in e.detail for e in record.events)
