@@ -1,0 +1,101 @@
+"""Cost code's share of an MPPI iteration on system C's tasks (the issue's budget: at most 10 %).
+
+For each task: the embedded formulation's code (checked and probed as in a trial), one MPPI iteration in the
+planning world (K = control.samples rollouts), then every stage's cost evaluated on that rollout batch with
+the loop's own lazy variables. Times are CPU seconds of this process (all rollout threads counted for MPPI),
+medians of `--repeats`; on a shared machine wall times stretch with the load, CPU times much less.
+Last line: one JSON object with per-task {stage: share} and `max_share`.
+Usage: .venv/bin/python bench/bench_coral_cost.py [--tasks push-force,flip-wall] [--repeats 5]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+
+import numpy as np  # noqa: E402
+
+import kintsugi.methods.builtin  # noqa: E402,F401
+from bench_mppi import machine  # noqa: E402
+from kintsugi.tasks import TASKS, load_all  # noqa: E402
+
+
+def measure(name: str, repeats: int) -> dict[str, float]:
+    from kintsugi.control import MPPI
+    from kintsugi.methods.coral.env import entry_env, rollout_env, static_env
+    from kintsugi.methods.coral.method import VARIANTS, Coral, probe_limits
+    from kintsugi.methods.coral.stages import attractor_of
+    from kintsugi.reasoning.costlib import compose
+    from kintsugi.reasoning.formulate import check_formulation
+    from kintsugi.tasks.contact.costs import View, total
+    from kintsugi.tasks.contact.execute import mppi_config
+    from kintsugi.tasks.contact.robot import ContactRobot
+    from kintsugi.tasks.contact.world import PlanningWorld
+    from kintsugi.trial import TrialSpec
+
+    task = TASKS.get(name).factory()
+    cfg = task.config({})
+    world, _, setup = task.build(cfg, "all", 0)
+    ctx = task.context(cfg, setup, False, TrialSpec(task=name, method="coral", variant="default", condition="all",
+                                                    seed=0))
+    obs = ContactRobot(world).observe()
+    req = Coral(ctx, VARIANTS["coral"]).scene_request(obs, {})
+    steps = round(cfg.control.horizon_s / cfg.sim.planning_timestep_s)
+    plan, program, _ = check_formulation(compose(req), req, cfg.control.samples, steps, probe_limits())
+    planning = PlanningWorld(cfg, ctx.known, dict(setup.nominal))
+    got: dict = {}
+
+    def keep(batch):  # noqa: ANN001, ANN202
+        got["batch"] = batch
+        return np.zeros(batch.controls.shape[0])
+
+    mppi = MPPI(planning.model, mppi_config(cfg, 0), keep)
+    data = planning.sync(obs.ee, obs.ee_vel, obs.fingers, obs.finger_vel,
+                         {k: (o.pos, o.quat, o.lin_vel, o.ang_vel) for k, o in obs.objects.items()}, obs.ctrl, obs.t)
+    it = []
+    for _ in range(repeats):
+        c = time.process_time()
+        mppi.step(data)
+        it.append(time.process_time() - c)
+    batch = got["batch"]
+    env0 = {**static_env(ctx.known, cfg), **entry_env(obs, ctx.known), "kept": np.asarray(0.0)}
+    shares = {"mppi_cpu_ms": round(1000 * statistics.median(it), 2)}
+    for spec in plan.stages:
+        att = attractor_of(plan, spec.region, cfg.control.attractor_samples, 0)
+        ts = []
+        for _ in range(repeats):
+            view = View(batch, planning.layout, obs)
+            c = time.process_time()
+            total(program.call(spec.cost, rollout_env(view, ctx.known, env0, att), view.tcp.shape[:2]))
+            ts.append(time.process_time() - c)
+        shares[spec.name] = round(statistics.median(ts) / statistics.median(it), 4)
+    mppi.close()
+    world.close()
+    return shares
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--tasks", default="pick-box,pick-clutter,push-force,flip-box,flip-wall")
+    ap.add_argument("--repeats", type=int, default=5)
+    args = ap.parse_args()
+    load_all()
+    print(f"machine: {machine()}")
+    out = {}
+    for name in args.tasks.split(","):
+        out[name] = measure(name, args.repeats)
+        stages = {k: v for k, v in out[name].items() if k != "mppi_cpu_ms"}
+        print(f"{name:14s} MPPI iteration {out[name]['mppi_cpu_ms']:7.1f} ms CPU; cost code share per stage: "
+              + ", ".join(f"{k} {v:.1%}" for k, v in stages.items()))
+    worst = max(v for s in out.values() for k, v in s.items() if k != "mppi_cpu_ms")
+    print(json.dumps({"tasks": out, "max_share": worst}))
+
+
+if __name__ == "__main__":
+    main()
