@@ -23,7 +23,7 @@ from pydantic import Field
 from kintsugi.config import StrictModel, apply_overrides
 from kintsugi.tasks.tabletop.cloth import CORNERS, TOWEL, TowelSection, corner_indices, towel_extra
 from kintsugi.tasks.tabletop.conditions import POSE_CONDITIONS, DropDisturbance, TrialParams, sample_params
-from kintsugi.tasks.tabletop.config import RobotSection, TabletopConfig
+from kintsugi.tasks.tabletop.config import DisturbanceSection, RobotSection, TabletopConfig
 from kintsugi.tasks.tabletop.disturbances import Disturbances
 from kintsugi.tasks.tabletop.planning import down_rotation
 from kintsugi.tasks.tabletop.spec import TaskSpec
@@ -62,6 +62,9 @@ class FoldTowelConfig(TabletopConfig):
     """The tabletop world with a towel: flat finger pads, a firm squeeze and a weak opening."""
 
     robot: RobotSection = RobotSection(pad_shape="box", gripper_kp=8000.0, gripper_open_force_n=3.0)
+    disturbance: DisturbanceSection = DisturbanceSection(drop_release_s=1.0)
+    """A dropped corner hangs where it was (the towel holds it): the slow, weak opening needs longer
+    than a rigid object's fall before the gripper closes again, or it re-grasps the corner."""
     towel: TowelSection = TowelSection()
     fold: FoldSection = FoldSection()
 
