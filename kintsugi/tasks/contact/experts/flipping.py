@@ -22,6 +22,9 @@ PUSH_HEIGHT = 0.7
 PADDLE = 0.01
 TIPPED_DEG = 45.0
 PIVOT_DONE_DEG = 125.0
+REACH_OVER_M = 0.06
+"""flip-wall: how far past the curb's face the pushing hand may go (far enough to carry the box off the
+curb top, where a box flipped in place would balance)."""
 """flip-wall: the hand lets go only this far past upright; a box let go near 100 deg can rock back."""
 
 
@@ -134,7 +137,7 @@ def flip_wall_fsm(ctx: ContactContext) -> list[StageFactory]:
         def cost(v: View) -> np.ndarray:
             up_z = v.up("box")[..., 2]
             # the hand never needs to pass the curb, and a box flung over it ends off the table
-            reach_over = np.maximum(v.tcp[..., 0] - face - 0.03, 0.0)
+            reach_over = np.maximum(v.tcp[..., 0] - face - REACH_OVER_M, 0.0)
             fling = np.maximum(norm(v.vel("box")) - 0.3, 0.0)
             return total(5 * up_z + 10 * high.distance(v) * step_up(up_z, 0.5, 0.2) + 0.5 * yaw_error(v.yaw, 0.0) ** 2
                          + 100 * reach_over + 20 * fling + W_SMOOTH * smoothness(v))
@@ -159,7 +162,7 @@ def flip_wall_fsm(ctx: ContactContext) -> list[StageFactory]:
 
         return Stage("withdraw", hold_tcp(back, 0.0), done, grip=0.0, timeout_s=3.0, goal={"x_mm": back[0] * 1000})
 
-    return [approach, to_curb, rise, pivot, lift_off, withdraw, settle("settle", 0.3, grip=0.0)]
+    return [approach, to_curb, rise, pivot, lift_off, withdraw, settle("settle", 1.0, grip=0.0)]
 
 
 def flip_wall_single(ctx: ContactContext) -> list[StageFactory]:
