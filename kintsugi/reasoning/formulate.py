@@ -163,7 +163,7 @@ def check_regions(regions: list[RegionSpec], req: FormulationRequest, notes: lis
         nums = [*r.center, *r.normal, r.radius, r.standoff, r.drop]
         if not all(math.isfinite(x) for x in nums):
             raise BadReply(f"regions[{i}] holds a number that is not finite; give metres")
-        n = math.sqrt(sum(x * x for x in r.normal))
+        n = math.hypot(*r.normal)  # no overflow: a 1e154 component squared is inf, and x / inf = 0
         if n < 1e-6:
             raise BadReply(f"regions[{i}].normal is zero; give the outward surface normal, e.g. [-1, 0, 0]")
         half = [s / 2 for s in sizes[name]]
