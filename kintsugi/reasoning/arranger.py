@@ -14,7 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any, Callable
 
-from kintsugi.reasoning.composer import arms_named, instructed_ops, node_constraints
+from kintsugi.reasoning.composer import arms_named, instructed_ops, node_constraints, place_table
 from kintsugi.reasoning.jsontext import BadReply
 from kintsugi.reasoning.symbolic import PlanningError, State, ground, parse_literals, plan
 from kintsugi.reasoning.taskgraph_types import ArrangerReply, ArrangerRequest, SeenObject
@@ -58,8 +58,10 @@ def _drop(s: State, arm: str, obj: str) -> State:
     nothing about it being lifted, over or tilted holds; we assume it landed upright (if it toppled, the
     `toppled` monitor of the next grasp sees it)."""
     keep = {a for a in s if not (a[0] in ("holding",) and a[1] == arm)
-            and not (a[0] in ("lifted", "over", "tilted") and a[1] == obj)}
-    return frozenset(keep | {("hand_empty", arm), ("on_table", obj), ("released", obj), ("upright", obj)})
+            and not (a[0] in ("lifted", "over", "over_place", "tilted") and a[1] == obj)}
+    # A lying object (a fork, a block) lands lying, keeping its heading; anything else we assume upright.
+    pose = ("flat", obj) if ("flat", obj) in s and ("upright", obj) not in s else ("upright", obj)
+    return frozenset(keep | {("hand_empty", arm), ("on_table", obj), ("released", obj), pose})
 
 
 def _unchanged(s: State, arm: str, obj: str) -> State:
@@ -92,20 +94,35 @@ FAILURES: tuple[FailureMode, ...] = (
 reports an unreachable keyframe as a recorded failure with the solver's message."""
 
 
+def _places(request: ArrangerRequest, arms: list[str], objects: list[str]) -> list[str]:
+    """The places (regions, directions) the composer's node facts name: constants that are no arm or object."""
+    from kintsugi.reasoning.taskgraph_types import parse_atom
+
+    out: list[str] = []
+    for texts in request.node_facts.values():
+        for t in texts:
+            for a in parse_atom(t)[2]:
+                if a not in arms and a not in objects and a not in out:
+                    out.append(a)
+    return out
+
+
 def _facts(texts: list[str], request: ArrangerRequest) -> State:
     pos, _ = parse_literals(texts, request.domain, where="node facts")
     return pos
 
 
-def _candidates(mode: FailureMode, edge: Any, u: State) -> list[tuple[str, str]]:
+def _candidates(mode: FailureMode, edge: Any, u: State, v: State | None = None) -> list[tuple[str, str]]:
     kinds = {a.name for a in edge.actions}
     if not kinds & mode.actions:
         return []
-    if mode.needs == "held":
-        return sorted((a[1], a[2]) for a in u if a[0] == "holding")
+    if mode.needs == "held":  # an edge that lets go on purpose (a handover's giver) is not watched for a drop
+        return sorted((a[1], a[2]) for a in u if a[0] == "holding" and (v is None or a in v))
     out = []
     for a in edge.actions:
         if a.name in mode.actions and isinstance(a.args.get("arm"), str) and isinstance(a.args.get("obj"), str):
+            if mode.name == "toppled" and ("upright", a.args["obj"]) not in u:
+                continue  # only what stands can topple (a lying fork's axis is horizontal by design)
             out.append((a.args["arm"], a.args["obj"]))
     return out
 
@@ -135,7 +152,7 @@ def _merge(start: State, edge: Any, graph: TaskGraph, facts: dict[str, State], o
 
 def _branch(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: FailureMode, arm: str, obj: str,
             start: State, facts: dict[str, State], ops: list, ctg: dict[str, float],
-            seen: dict[str, SeenObject]) -> dict:
+            seen: dict[str, SeenObject], where: Any = None) -> dict:
     """One RecoveryProposal: monitor, recovery nodes and edges from the failure context to the merge node."""
     from kintsugi.reasoning.composer import edge_actions
 
@@ -159,7 +176,7 @@ def _branch(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: Failure
             constraints, gripper = node_constraints(request.domain, sorted(after - state), seen)
             nodes.append({"id": target, "description": f"recovering from {mode.name}: {op.label} done",
                           "constraints": constraints, "gripper": gripper})
-        edges.append({"id": f"re.{tag}.{i}", "source": prev, "target": target, "actions": edge_actions(op, seen),
+        edges.append({"id": f"re.{tag}.{i}", "source": prev, "target": target, "actions": edge_actions(op, seen, where),
                       "cost": op.cost, "description": f"recovery for {mode.name}: {op.label}"})
         prev, state = target, after
     monitor = {"id": f"m.{tag}", "failure_mode": mode.name, "check": mode.check(arm, obj), "margin": mode.margin,
@@ -185,7 +202,10 @@ def embedded_arrange(request: ArrangerRequest) -> ArrangerReply:
                             f"none for {missing[0]!r}")
     seen = {o.name: o for o in request.objects}
     arms = arms_named(request.task, [a.name for a in request.arms])
-    ops = instructed_ops(request.task, request.domain, arms, [o.name for o in request.objects if o.visible])
+    names = [o.name for o in request.objects if o.visible]
+    places = _places(request, [a.name for a in request.arms], [o.name for o in request.objects])
+    where = place_table(places, request.domain, seen, dict(request.regions))
+    ops = instructed_ops(request.task, request.domain, arms, names, places)
     wanted = set(request.failure_modes)
     facts = {n.id: _facts(request.node_facts[n.id], request) for n in graph.nodes}
     ctg = cost_to_go(graph)
@@ -198,10 +218,10 @@ def embedded_arrange(request: ArrangerRequest) -> ArrangerReply:
         for mode in FAILURES:
             if mode.name not in wanted:
                 continue
-            for arm, obj in _candidates(mode, edge, u):
+            for arm, obj in _candidates(mode, edge, u, facts[edge.target]):
                 try:
                     proposals.append(_branch(request, graph, edge, mode, arm, obj, mode.after(u, arm, obj), facts,
-                                             ops, ctg, seen))
+                                             ops, ctg, seen, where))
                 except PlanningError as exc:
                     notes.append(f"{edge.id} {mode.name}({arm}, {obj}): no recovery ({exc})")
     covered = sorted({p["monitor"]["failure_mode"] for p in proposals})

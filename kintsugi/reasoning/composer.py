@@ -25,14 +25,18 @@ UPRIGHT_HEIGHT_RATIO = 0.6
 """Undecided uprightness: a standing cup is ~0.7 as tall as its largest extent, a fallen bottle ~0.3."""
 LIFTED_Z_M = 0.05
 """A held object whose lowest point is this high is clear of the table."""
-_FN = re.compile(r"^\$(x|y|z|mirror)\(\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*(?:,\s*(-?[0-9.eE+-]+)\s*)?\)$")
+_FN = re.compile(r"^\$(x|y|z|hy|nhy|rx|ry|mirror)\(\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*(?:,\s*(-?[0-9.eE+-]+)\s*)?\)$")
+_FN2 = re.compile(r"^\$(dx|dy|turn)\(\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*,\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*\)$")
+FLAT_RATIO = 1.1
+"""An object no taller than this times its middle extent lies flat (a fork, a tray, a cube; not a standing bottle)."""
+HEADING_TOL_DEG = 20.0
 
 
 class GoalHolds(PlanningError):
     """Planning found nothing to do: the observed scene already satisfies the goal."""
 
 
-def observed_facts(request: Any, domain: Domain) -> State:
+def observed_facts(request: Any, domain: Domain, places: list[str] = ()) -> State:
     """Facts read off the observation, for the predicates the domain declares (closed world: the rest are
     false): hand_empty/holding from the arms' pads, upright from perception's uprightness, on_table from the
     object's lowest point (lifted: held and clear of it), released when no arm holds it."""
@@ -55,7 +59,71 @@ def observed_facts(request: Any, domain: Domain) -> State:
             facts.add(("lifted", o.name))
         if "released" in known and o.name not in held:
             facts.add(("released", o.name))
+        if "narrow" in known and o.extent is not None and sorted(o.extent)[1] < domain.max_grasp_width_m:
+            facts.add(("narrow", o.name))
+        if "flat" in known and looks_flat(o):
+            facts.add(("flat", o.name))
+        if "heading" in known:
+            yaw = head_yaw_deg(o)
+            facts |= {("heading", o.name, d) for d, psi in domain.directions.items()
+                      if yaw is not None and abs(wrap_deg(yaw - psi)) <= HEADING_TOL_DEG}
+    for p in places:
+        if "direction" in known and p in domain.directions:
+            facts.add(("direction", p))
+        elif "region" in known:
+            facts.add(("region", p))
     return frozenset(facts)
+
+
+def looks_flat(o: SeenObject) -> bool:
+    if o.top_z is None or o.bottom_z is None or o.extent is None:
+        return False
+    # extent: along the principal axis, then across it; a standing bottle is taller than its second extent.
+    return o.top_z - o.bottom_z <= FLAT_RATIO * sorted(o.extent)[1]
+
+
+def wrap_deg(d: float) -> float:
+    return (d + 180.0) % 360.0 - 180.0
+
+
+def head_yaw_deg(o: SeenObject) -> float | None:
+    """Yaw of a long object's head from its perceived axis ends: the wide head pulls the point cloud's centroid
+    towards it, so the axis end nearer the centroid is the head. None without axis ends."""
+    import math
+
+    ends = [o.extremes.get(k) for k in ("axis_pos", "axis_neg")]
+    if o.centroid is None or any(e is None for e in ends):
+        return None
+    c = o.centroid
+    near, far = sorted(ends, key=lambda e: math.hypot(e[0] - c[0], e[1] - c[1]))
+    return math.degrees(math.atan2(near[1] - far[1], near[0] - far[0]))
+
+
+def goal_places(goal: list[str], arms: list[str], objects: list[str]) -> list[str]:
+    """The goal's constants that name no arm or object: regions (`target`, `beside_left(plate)`), directions."""
+    from kintsugi.reasoning.taskgraph_types import parse_atom
+
+    out: list[str] = []
+    for text in goal:
+        for a in parse_atom(text)[2]:
+            if a not in arms and a not in objects and a not in out and not a.startswith("?") and a != "_":
+                out.append(a)
+    return out
+
+
+def place_xy(place: str, domain: Domain, seen: dict[str, SeenObject], regions: dict) -> tuple[float, float]:
+    """A region's centre: a named region of the task statement, or `fn(obj)` from the object's perceived centroid."""
+    if place in regions:
+        return tuple(float(v) for v in regions[place])
+    m = re.fullmatch(r"([A-Za-z][A-Za-z0-9_]*)\(([A-Za-z][A-Za-z0-9_]*)\)", place)
+    if m and m.group(1) in domain.relative_places:
+        o = seen.get(m.group(2))
+        if o is None or o.centroid is None:
+            raise PlanningError(f"place {place!r}: object {m.group(2)!r} was not perceived")
+        dx, dy = domain.relative_places[m.group(1)]
+        return o.centroid[0] + dx, o.centroid[1] + dy
+    raise PlanningError(f"place {place!r} is neither a region of the task ({', '.join(regions) or 'none'}) nor "
+                        f"one of {', '.join(f'{k}(object)' for k in domain.relative_places) or 'no place functions'}")
 
 
 def looks_upright(o: SeenObject) -> bool:
@@ -83,7 +151,8 @@ def arm_bindings(task: str, arms: list[str], objects: list[str]) -> dict[str, st
     out = {}
     for o in objects:
         for a in arms:
-            if re.search(rf"\b{re.escape(o.lower())}\s+with\s+(the\s+)?{a}\s+(arm|hand)\b", text):
+            if (re.search(rf"\b{re.escape(o.lower())}\s+with\s+(the\s+)?{a}\s+(arm|hand)\b", text)
+                    or re.search(rf"\b{a}\s+(arm|hand)\s+for\s+(the\s+)?{re.escape(o.lower())}\b", text)):
                 out[o] = a
     return out
 
@@ -94,16 +163,17 @@ def held_up(task: str, objects: list[str]) -> list[str]:
     return [o for o in objects if re.search(rf"\bhold\s+(the\s+)?{re.escape(o.lower())}\s+up\b", text)]
 
 
-def instructed_ops(task: str, domain: Any, arms: list[str], objects: list[str]) -> list:
-    """The grounded operators the instruction allows: an object given to one arm is taken by that arm only
-    (no instance adds holding(other arm, it)); an object to be held up must be lifted before any operator
+def instructed_ops(task: str, domain: Any, arms: list[str], objects: list[str], places: list[str] = ()) -> list:
+    """The grounded operators the instruction allows: an object given to one arm is taken from the table by
+    that arm only (no instance that picks it up adds holding(other arm, it); a handover may pass it on); an object to be held up must be lifted before any operator
     makes a fact that names it as the target (carry over it, pour into it)."""
     from dataclasses import replace
 
     bound, up = arm_bindings(task, arms, objects), held_up(task, objects)
     out = []
-    for op in ground(domain, arms, objects):
-        if any(a[0] == "holding" and a[2] in bound and bound[a[2]] != a[1] for a in op.add):
+    for op in ground(domain, arms, objects, places):
+        if any(a[0] == "holding" and a[2] in bound and bound[a[2]] != a[1] and ("released", a[2]) in op.pre_pos
+               for a in op.add):
             continue
         targets = {a[2] for a in op.add if len(a) == 3 and a[1] in objects and a[2] in up}
         if targets:
@@ -112,17 +182,23 @@ def instructed_ops(task: str, domain: Any, arms: list[str], objects: list[str]) 
     return out
 
 
-def fill(value: Any, binding: dict[str, str], seen: dict[str, SeenObject]) -> Any:
-    """Instantiate a template: `?p` -> its value, `$x(?obj)` -> the object's perceived centroid x (y, z),
-    `$mirror(?arm, v)` -> v for the right arm, -v for the left; lists and dicts recursively."""
+def fill(value: Any, binding: dict[str, str], seen: dict[str, SeenObject], where: Any = None) -> Any:
+    """Instantiate a template: `?p` -> its value, `$x(?obj[, d])` -> the object's perceived centroid x (y, z)
+    plus d, `$hy(?obj, d)` / `$nhy` -> +/- (half its perceived y extent + d), `$rx(?place)` / `$ry` -> the
+    region's centre, `$dx(?obj, ?place)` / `$dy` -> region centre minus the object's centroid, `$turn(?obj,
+    ?dir)` -> the turn about the vertical bringing the object's head to the direction, `$mirror(?arm, v)` -> v
+    for the right arm, -v for the left; lists and dicts recursively. `where`: place -> (x, y)."""
     if isinstance(value, dict):
-        return {k: fill(v, binding, seen) for k, v in value.items()}
+        return {k: fill(v, binding, seen, where) for k, v in value.items()}
     if isinstance(value, list):
-        return [fill(v, binding, seen) for v in value]
+        return [fill(v, binding, seen, where) for v in value]
     if not isinstance(value, str):
         return value
     if value in binding:
         return binding[value]
+    m2 = _FN2.match(value)
+    if m2:
+        return _fill2(value, m2.groups(), binding, seen, where or {})
     m = _FN.match(value)
     if not m:
         return value
@@ -134,10 +210,44 @@ def fill(value: Any, binding: dict[str, str], seen: dict[str, SeenObject]) -> An
         if num is None:
             raise PlanningError(f"template {value!r} needs a number: $mirror(?arm, v)")
         return float(num) if arg == "right" else -float(num)
+    d = float(num) if num is not None else 0.0
+    if fn in ("rx", "ry"):
+        return round(_where(value, arg, where or {})["xy".index(fn[1])] + d, 4)
     obj = seen.get(arg)
+    if fn in ("hy", "nhy"):
+        if obj is None or obj.extent is None:
+            raise PlanningError(f"template {value!r}: object {arg!r} has no perceived extent")
+        half = obj.extent[1] / 2.0 + d
+        return round(half if fn == "hy" else -half, 4)
     if obj is None or obj.centroid is None:
         raise PlanningError(f"template {value!r}: object {arg!r} was not perceived, so its position is unknown")
-    return round(float(obj.centroid["xyz".index(fn)]), 4)
+    return round(float(obj.centroid["xyz".index(fn)]) + d, 4)
+
+
+def _where(value: str, place: str, where: dict) -> tuple[float, float]:
+    if place not in where:
+        raise PlanningError(f"template {value!r}: {place!r} is not a known region")
+    return where[place]
+
+
+def _fill2(value: str, groups: tuple, binding: dict[str, str], seen: dict[str, SeenObject], where: dict) -> float:
+    fn, p1, p2 = groups
+    for p in (p1, p2):
+        if p not in binding:
+            raise PlanningError(f"template {value!r} names undeclared parameter {p}")
+    obj = seen.get(binding[p1])
+    if obj is None or obj.centroid is None:
+        raise PlanningError(f"template {value!r}: object {binding[p1]!r} was not perceived")
+    if fn == "turn":
+        yaw = head_yaw_deg(obj)
+        psi = where.get(("direction", binding[p2]))
+        if yaw is None or psi is None:
+            raise PlanningError(f"template {value!r}: no perceived head for {binding[p1]!r} or unknown direction")
+        # A gripper pointing down turns the held object by minus its own turn about the approach axis.
+        return round(wrap_deg(yaw - psi), 3)
+    xy = _where(value, binding[p2], where)
+    i = "xy".index(fn[1])
+    return round(xy[i] - float(obj.centroid[i]), 4)
 
 
 def _positional(binding: dict[str, str], args: tuple[str, ...]) -> dict[str, str]:
@@ -158,12 +268,12 @@ def node_constraints(domain: Domain, atoms: list[Atom], seen: dict[str, SeenObje
     return constraints, gripper
 
 
-def edge_actions(op: GroundOp, seen: dict[str, SeenObject]) -> list:
-    return [fill(a, dict(op.binding), seen) for a in op.spec.actions]
+def edge_actions(op: GroundOp, seen: dict[str, SeenObject], where: Any = None) -> list:
+    return [fill(a, dict(op.binding), seen, where) for a in op.spec.actions]
 
 
 def build_graph(task: str, domain: Domain, initial: State, steps: list[GroundOp],
-                seen: dict[str, SeenObject], goal: frozenset[Atom] = frozenset()) -> ComposerReply:
+                seen: dict[str, SeenObject], goal: frozenset[Atom] = frozenset(), where: Any = None) -> ComposerReply:
     """A chain graph start -> s1 -> ... -> goal from a plan, with the symbolic state of every node. The goal
     node checks every goal fact (not only the last step's), so the verdict covers the whole task."""
     if not steps:
@@ -182,7 +292,7 @@ def build_graph(task: str, domain: Domain, initial: State, steps: list[GroundOp]
         nid, eid = f"s{i}_{op.name}", f"e{i}_{op.name}"
         nodes.append({"id": nid, "description": ", ".join(atom_text(a) for a in made) or op.label,
                       "constraints": constraints, "gripper": gripper})
-        edges.append({"id": eid, "source": prev, "target": nid, "actions": edge_actions(op, seen),
+        edges.append({"id": eid, "source": prev, "target": nid, "actions": edge_actions(op, seen, where),
                       "cost": op.cost, "description": op.label})
         facts[nid] = sorted(atom_text(a) for a in after)
         operators[eid] = op.label
@@ -203,11 +313,25 @@ def embedded_compose(request: ComposerRequest) -> ComposerReply:
     domain = request.domain
     seen = {o.name: o for o in request.objects}
     arms = arms_named(request.task, [a.name for a in request.arms])
-    initial = observed_facts(request, domain)
+    names = [o.name for o in request.objects if o.visible]
+    places = goal_places(list(request.goal), [a.name for a in request.arms], [o.name for o in request.objects])
+    where = place_table(places, domain, seen, dict(request.regions))
+    initial = observed_facts(request, domain, places)
     goal = parse_literals(list(request.goal), domain, where="task goal")
-    ops = instructed_ops(request.task, domain, arms, [o.name for o in request.objects if o.visible])
+    ops = instructed_ops(request.task, domain, arms, names, places)
     steps = plan(initial, goal, ops)
-    return build_graph(request.task, domain, initial, steps, seen, goal[0])
+    return build_graph(request.task, domain, initial, steps, seen, goal[0], where)
+
+
+def place_table(places: list[str], domain: Domain, seen: dict[str, SeenObject], regions: dict) -> dict:
+    """place -> region centre (x, y); ("direction", d) -> yaw for the directions."""
+    out: dict = {}
+    for p in places:
+        if p in domain.directions:
+            out[("direction", p)] = domain.directions[p]
+        else:
+            out[p] = place_xy(p, domain, seen, regions)
+    return out
 
 
 def check_composition(reply: ComposerReply, vocabulary: Vocabulary) -> TaskGraph:

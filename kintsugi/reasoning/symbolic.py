@@ -88,15 +88,17 @@ def parse_literals(texts: list[str], domain: Domain, binding: dict[str, str] | N
     return frozenset(pos), frozenset(neg)
 
 
-def ground(domain: Domain, arms: list[str], objects: list[str]) -> list[GroundOp]:
-    """Every operator instance over the given arms and objects (distinct objects per instance)."""
-    pools = {"arm": arms, "object": objects}
+def ground(domain: Domain, arms: list[str], objects: list[str], places: list[str] = ()) -> list[GroundOp]:
+    """Every operator instance over the given arms, objects and places (the goal's other constants: regions,
+    directions), with distinct objects and distinct arms per instance (a handover needs two arms)."""
+    pools = {"arm": arms, "object": objects, "place": list(places)}
     out: list[GroundOp] = []
     for op in domain.operators:
         names = list(op.params)
         for values in itertools.product(*(pools[op.params[n]] for n in names)):
             objs = [v for n, v in zip(names, values) if op.params[n] == "object"]
-            if len(set(objs)) != len(objs):
+            arms_ = [v for n, v in zip(names, values) if op.params[n] == "arm"]
+            if len(set(objs)) != len(objs) or len(set(arms_)) != len(arms_):
                 continue
             b = dict(zip(names, values))
             where = f"operator {op.name}"

@@ -17,8 +17,11 @@ from pydantic import Field, JsonValue, field_validator
 from kintsugi.config import StrictModel
 
 Vec3 = tuple[float, float, float]
-ATOM = re.compile(r"^\s*(not\s+)?([A-Za-z][A-Za-z0-9_]*)\s*\(\s*([^()]*)\)\s*$")
-"""A literal: `pred(a, b)` or `not pred(a)`; arguments are names, `?params`, or `_` (any value; deletes only)."""
+ATOM = re.compile(r"^\s*(not\s+)?([A-Za-z][A-Za-z0-9_]*)\s*\(\s*((?:[^()]|\([^()]*\))*)\)\s*$")
+"""A literal: `pred(a, b)` or `not pred(a)`; arguments are names, `?params`, `_` (any value; deletes only), or
+a place term `fn(name)` (a region relative to an object, e.g. `beside_left(plate)`), kept as one constant."""
+TERM = re.compile(r"\??[A-Za-z][A-Za-z0-9_]*|_|[A-Za-z][A-Za-z0-9_]*\(\s*[A-Za-z][A-Za-z0-9_]*\s*\)")
+_ARG_SPLIT = re.compile(r",(?![^()]*\))")
 Literal_ = Annotated[str, Field(max_length=200)]
 FAILURE_MODES = ("missed_grasp", "object_moved", "toppled", "drop", "slip", "ik_infeasible")
 """The failure modes the arranger is asked to anticipate (issue 8)."""
@@ -29,10 +32,10 @@ def parse_atom(text: str) -> tuple[bool, str, tuple[str, ...]]:
     m = ATOM.match(text)
     if not m:
         raise ValueError(f"{text!r} is not a literal like pred(a, b) or not pred(a)")
-    args = tuple(a.strip() for a in m.group(3).split(",") if a.strip())
+    args = tuple(re.sub(r"\s+", "", a) for a in _ARG_SPLIT.split(m.group(3)) if a.strip())
     for a in args:
-        if not re.fullmatch(r"\??[A-Za-z][A-Za-z0-9_]*|_", a):
-            raise ValueError(f"{text!r}: argument {a!r} is not a name, ?param or _ (any, in deletes)")
+        if not TERM.fullmatch(a):
+            raise ValueError(f"{text!r}: argument {a!r} is not a name, ?param, fn(name) or _ (any, in deletes)")
     return m.group(1) is None, m.group(2), args
 
 
@@ -47,7 +50,8 @@ class PredicateSpec(StrictModel):
     check it on a sub-goal node; `?param` strings in the constraint templates are filled in."""
 
     name: str = Field(pattern=r"^[A-Za-z][A-Za-z0-9_]*$")
-    params: list[Literal["arm", "object"]] = Field(max_length=4)
+    params: list[Literal["arm", "object", "place"]] = Field(max_length=4)
+    """`place`: a constant of the goal that names no arm or object (a region, a direction such as `away`)."""
     meaning: str = Field(default="", max_length=400)
     constraints: list[dict[str, JsonValue]] = Field(default_factory=list, max_length=8)
     """Constraint templates (kintsugi.taskgraph.constraints) with `?1`, `?2` for the arguments."""
@@ -60,7 +64,7 @@ class OperatorSpec(StrictModel):
     carry it out (templates), and its physical cost in control steps."""
 
     name: str = Field(pattern=r"^[A-Za-z][A-Za-z0-9_]*$")
-    params: dict[str, Literal["arm", "object"]] = Field(max_length=4)
+    params: dict[str, Literal["arm", "object", "place"]] = Field(max_length=4)
     """`?name` -> type."""
     pre: list[Literal_] = Field(default_factory=list, max_length=16)
     add: list[Literal_] = Field(default_factory=list, max_length=16)
@@ -90,6 +94,12 @@ class Domain(StrictModel):
 
     predicates: list[PredicateSpec] = Field(min_length=1, max_length=64)
     operators: list[OperatorSpec] = Field(min_length=1, max_length=64)
+    relative_places: dict[str, tuple[float, float]] = Field(default_factory=dict, max_length=16)
+    """Place functions `fn(obj)` -> a region centred this far (x, y, metres) from the object's perceived centroid."""
+    max_grasp_width_m: float = Field(0.10, gt=0.0, le=1.0)
+    """One gripper's widest opening: an object narrower than this (its smaller horizontal extent) is `narrow`."""
+    directions: dict[str, float] = Field(default_factory=dict, max_length=16)
+    """Direction names a heading goal may use -> yaw in degrees (0 = +x, away from the robot)."""
 
 
 class SeenObject(StrictModel):
@@ -125,6 +135,10 @@ class ComposerRequest(StrictModel):
     objects: list[SeenObject] = Field(min_length=1, max_length=32)
     arms: list[SeenArm] = Field(min_length=1, max_length=2)
     domain: Domain
+    regions: dict[str, tuple[float, float]] = Field(default_factory=dict, max_length=16)
+    """Named fixed regions of the task statement (centre x, y in metres: where the painted region is), for
+    goals such as `in_region(block, target)`; regions relative to an object (`beside_left(plate)`) are
+    computed from its perceived centroid instead."""
     images_png: dict[str, bytes] = Field(default_factory=dict, repr=False)
 
     @field_validator("goal")
@@ -150,6 +164,8 @@ class ArrangerRequest(StrictModel):
     objects: list[SeenObject] = Field(min_length=1, max_length=32)
     arms: list[SeenArm] = Field(min_length=1, max_length=2)
     domain: Domain
+    regions: dict[str, tuple[float, float]] = Field(default_factory=dict, max_length=16)
+    """As in ComposerRequest: the task statement's named fixed regions."""
     failure_modes: list[str] = Field(default_factory=lambda: list(FAILURE_MODES))
     images_png: dict[str, bytes] = Field(default_factory=dict, repr=False)
 

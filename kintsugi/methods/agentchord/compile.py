@@ -37,8 +37,21 @@ class Compiled:
         return self.result.graph
 
 
+def task_regions(spec: Any, cfg: Any) -> dict[str, tuple[float, float]]:
+    """The task statement's fixed regions (where the green patch is painted; part of the task, like the
+    instruction, not simulator state) by name; with exactly one, it is also `target` ("the target region").
+    Regions beside an object are not listed: the composer places them from the object's perceived centre."""
+    if cfg is None:
+        return {}
+    fixed = {n: tuple(cfg.targets[n].center_m) for n in getattr(spec, "targets", ())
+             if n in cfg.targets and cfg.targets[n].relative_to is None}
+    if len(fixed) == 1 and "target" not in fixed:
+        fixed["target"] = next(iter(fixed.values()))
+    return fixed
+
+
 def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = True,
-                  goal: list[str] | None = None) -> Compiled:
+                  goal: list[str] | None = None, cfg: Any = None) -> Compiled:
     """spec: the task's TaskSpec (instruction, goal, objects); observation: the robot's first Observation.
     Raises ReasoningError (recorded in the transcript when the reasoner records) when a role fails.
     With `arranger=False` (ReKep-style) there is one planning call: the monitors are the nominal graph's own
@@ -48,7 +61,7 @@ def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = T
     t0 = time.perf_counter()
     try:
         request = ComposerRequest(task=spec.instruction, goal=list(spec.goal if goal is None else goal),
-                                  objects=objects, arms=arms,
+                                  objects=objects, arms=arms, regions=task_regions(spec, cfg),
                                   domain=TABLETOP_DOMAIN, images_png=dict(observation.images_png))
     except ValidationError as exc:
         raise PlanningError(f"task {spec.name!r} cannot be composed: {describe_validation_error(exc)}") from None
@@ -60,6 +73,7 @@ def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = T
                         {"composer": t1 - t0, "arranger": 0.0})
     arrange = ArrangerRequest(task=spec.instruction, graph=composed.graph, node_facts=composed.node_facts,
                               edge_operators=composed.edge_operators, objects=objects, arms=arms,
+                              regions=task_regions(spec, cfg),
                               domain=TABLETOP_DOMAIN, images_png=dict(observation.images_png))
     result, arranged = ask_arrange(reasoner, arrange, nominal, vocab)
     t2 = time.perf_counter()

@@ -17,6 +17,28 @@ POUR_HEIGHT_M = 0.14
 POUR_DEG = 100.0
 SIDE_FORWARD_RPY = [0.0, 90.0, 0.0]
 """Gripper horizontal, pointing +x: carries an upright object side-on."""
+BESIDE_M = 0.18
+"""`beside_left(o)` / `beside_right(o)`: a region this far left / right (world y) of the object's centre."""
+HANDOVER_XYZ = [0.42, 0.0, 0.20]
+"""Where a giving arm presents a held object between the two arms (grasp point, gripper pointing down)."""
+DOWN_RPY = [0.0, 180.0, 0.0]
+TAKE_REACH_M = 0.10
+"""The taking arm comes in side-on from this far beside the presented object, then closes in..."""
+TAKE_DEPTH_M = 0.01
+"""...stopping this short of its centre (its palm stays off the giver's fingers)..."""
+TAKE_HIGH_M = 0.012
+"""...and this far above it (its palm clears the table when it later places the object)."""
+GIVER_CLEAR_M = 0.08
+INSIDE_AT_M = -0.03
+"""Objects go into a container this far behind its centre (x), clear of rims an arm may later take."""
+INSIDE_FLOOR_M = 0.014
+"""Placing into a shallow container: release this high above the table (its floor plus a clearance)."""
+RIM_FORWARD_M = 0.05
+RIM_HOLD_Z_M = 0.025
+RIM_INSET_M = 0.003
+"""Two-arm carry: each arm takes a side rim this far forward of the centre, this high, this far inside the
+perceived side (half a wall)."""
+CARRY_LIFT_M = 0.03
 
 
 def _p(name, params, meaning, constraints=(), gripper=None) -> PredicateSpec:  # noqa: ANN001
@@ -42,6 +64,17 @@ PREDICATES = [
     _p("tilted", ["object"], "the object is tilted to pouring", [{"kind": "tilted", "object": "?1", "min_deg": 60}]),
     _p("poured", ["object", "object"], "the first object was tilted to pour over the second (history)"),
     _p("released", ["object"], "no arm holds the object"),
+    _p("flat", ["object"], "the object lies flat (it is no taller than it is wide), on the table or level in the hand"),
+    _p("narrow", ["object"], "the object fits between one gripper's open fingers (static, from its perceived size)"),
+    _p("region", ["place"], "the place is a region of the table (static)"),
+    _p("direction", ["place"], "the place is a direction a heading goal may name (static)"),
+    _p("over_place", ["object", "place"], "the held object is carried above the region"),
+    _p("in_region", ["object", "place"], "the object's centre lies in the region"),
+    _p("heading", ["object", "place"], "the lying object's head points in the direction"),
+    _p("handed_over", ["object", "arm", "arm"], "the first arm held the object, then the second took it (history)"),
+    _p("dropped", ["object"], "the object fell from a gripper (history; no action makes it)"),
+    _p("inside", ["object", "object"], "the first object stands inside the second (a container)"),
+    _p("moved", ["object"], "the object was carried away from where it was first seen"),
 ]
 
 
@@ -51,9 +84,17 @@ def _op(name, params, pre, add, delete, actions, cost, description) -> OperatorS
 
 
 A, O, T = "?arm", "?obj", "?target"
+G, P, D, C = "?giver", "?place", "?dir", "?box"
+
+
+def _both(call: dict, per_arm: dict | None = None) -> dict:
+    """One `drive` action: the same call on both arms at once, with per-arm extra arguments."""
+    arms = {arm: {"action": call["name"], "arm": arm, **call["args"], **(per_arm or {}).get(arm, {})}
+            for arm in ("left", "right")}
+    return {"name": "drive", "args": arms}
 OPERATORS = [
     _op("grasp", {A: "arm", O: "object"},
-        ["hand_empty(?arm)", "upright(?obj)", "on_table(?obj)", "released(?obj)"],
+        ["hand_empty(?arm)", "narrow(?obj)", "upright(?obj)", "on_table(?obj)", "released(?obj)"],
         ["holding(?arm, ?obj)"], ["hand_empty(?arm)", "released(?obj)"],
         [{"name": "grasp", "args": {"arm": A, "obj": O, "pre_grasp_offset": 0.08}}], 260,
         "open, approach an upright object side-on from its pre-grasp pose, close on it"),
@@ -82,6 +123,78 @@ OPERATORS = [
         ["holding(?arm, ?obj)", "lifted(?obj)", "over(?obj, _)"],
         [{"name": "place", "args": {"arm": A, "x": "$x(?obj)", "y": "$y(?obj)"}}], 260,
         "lower the held object onto the table where it was first seen, release it, back away"),
+    _op("grasp_lying", {A: "arm", O: "object"},
+        ["hand_empty(?arm)", "narrow(?obj)", "flat(?obj)", "not upright(?obj)", "on_table(?obj)",
+         "released(?obj)"],
+        ["holding(?arm, ?obj)"], ["hand_empty(?arm)", "released(?obj)"],
+        [{"name": "grasp", "args": {"arm": A, "obj": O, "pre_grasp_offset": 0.06}}], 260,
+        "open, come down over an object lying flat, close on it"),
+    _op("carry_to", {A: "arm", O: "object", P: "place"},
+        ["holding(?arm, ?obj)", "lifted(?obj)", "region(?place)", "not over_place(?obj, ?place)"],
+        ["over_place(?obj, ?place)"], ["over_place(?obj, _)", "over(?obj, _)"],
+        [{"name": "move_to_target", "args": {"arm": A, "xyz": [f"$rx({P})", f"$ry({P})", f"$z({O}, {LIFT_M})"]}}],
+        140, "carry the held object, keeping the hand's orientation, to a lifted height above the region's centre "
+        "(an absolute target, so it holds wherever the object was picked up)"),
+    _op("turn_heading", {A: "arm", O: "object", D: "place", P: "place"},
+        ["holding(?arm, ?obj)", "lifted(?obj)", "flat(?obj)", "direction(?dir)", "over_place(?obj, ?place)",
+         "not heading(?obj, ?dir)"],
+        ["heading(?obj, ?dir)"], ["heading(?obj, _)"],
+        [{"name": "rotate_eef", "args": {"arm": A, "angle_deg": f"$turn({O}, {D})", "axis": "approach"}}], 110,
+        "turn the held lying object about the vertical until its head points in the direction (over its "
+        "region: near the shoulder the wrist runs out of range)"),
+    _op("place_at", {A: "arm", O: "object", P: "place"},
+        ["holding(?arm, ?obj)", "lifted(?obj)", "over_place(?obj, ?place)"],
+        ["in_region(?obj, ?place)", "on_table(?obj)", "released(?obj)", "hand_empty(?arm)"],
+        ["holding(?arm, ?obj)", "lifted(?obj)", "over(?obj, _)", "over_place(?obj, _)"],
+        [{"name": "place", "args": {"arm": A, "x": f"$rx({P})", "y": f"$ry({P})"}},
+         {"name": "back", "args": {"arm": A}}], 300,
+        "lower the held object, carried above the region, onto its centre, release it, back away"),
+    _op("take_over", {A: "arm", G: "arm", O: "object"},
+        ["holding(?giver, ?obj)", "lifted(?obj)", "hand_empty(?arm)"],
+        ["holding(?arm, ?obj)"], ["hand_empty(?arm)", "over(?obj, _)", "over_place(?obj, _)"],
+        [{"name": "move_to_target", "args": {"arm": G, "xyz": HANDOVER_XYZ, "rpy_deg": DOWN_RPY}},
+         {"name": "move_to_obj", "args": {"arm": A, "obj": O,
+                                          "offset": [0.0, f"$mirror(?arm, -{TAKE_REACH_M})", TAKE_HIGH_M],
+                                          "rpy_deg": ["$mirror(?arm, -90)", 90.0, 0.0]}},
+         {"name": "move_by_offset", "args": {"arm": A, "dxyz": [0.0, f"$mirror(?arm, {TAKE_REACH_M - TAKE_DEPTH_M})",
+                                                                0.0]}},
+         {"name": "close_gripper", "args": {"arm": A}}], 330,
+        "first half of a handover: the giving arm presents the held object between the arms, the other comes "
+        "in side-on and closes on it (both now hold it)"),
+    _op("let_go", {G: "arm", A: "arm", O: "object"},
+        ["holding(?giver, ?obj)", "holding(?arm, ?obj)"],
+        ["hand_empty(?giver)", "handed_over(?obj, ?giver, ?arm)"], ["holding(?giver, ?obj)"],
+        [{"name": "open_gripper", "args": {"arm": G}},
+         {"name": "move_by_offset", "args": {"arm": G, "dxyz": [0.0, 0.0, GIVER_CLEAR_M]}}], 90,
+        "second half of a handover: the giving arm opens and moves clear, the other keeps the object"),
+    _op("put_inside", {A: "arm", O: "object", C: "object"},
+        ["holding(?arm, ?obj)", "lifted(?obj)", "upright(?obj)", "flat(?box)", "on_table(?box)",
+         "not moved(?box)", "not inside(?box, ?obj)"],
+        ["inside(?obj, ?box)", "released(?obj)", "hand_empty(?arm)"],
+        ["holding(?arm, ?obj)", "lifted(?obj)", "over(?obj, _)", "over_place(?obj, _)"],
+        [{"name": "place", "args": {"arm": A, "x": f"$x({C}, {INSIDE_AT_M})", "y": f"$y({C})",
+                                    "z_offset": INSIDE_FLOOR_M}},
+         {"name": "back", "args": {"arm": A}}], 300,
+        "lower the held upright object into a flat open container where it was first seen, release, back away"),
+    _op("carry_both", {O: "object", P: "place"},
+        ["hand_empty(left)", "hand_empty(right)", "not narrow(?obj)", "released(?obj)", "on_table(?obj)",
+         "flat(?obj)",
+         "region(?place)", "not in_region(?obj, ?place)"],
+        ["in_region(?obj, ?place)", "moved(?obj)"], [],
+        [_both({"name": "grasp", "args": {"obj": O, "pre_grasp_offset": 0.05}},
+               {"left": {"grasp_offset": [RIM_FORWARD_M, f"$hy({O}, -{RIM_INSET_M})", RIM_HOLD_Z_M]},
+                "right": {"grasp_offset": [RIM_FORWARD_M, f"$nhy({O}, -{RIM_INSET_M})", RIM_HOLD_Z_M]}}),
+         _both({"name": "move_by_offset", "args": {"dxyz": [0.0, 0.0, CARRY_LIFT_M]}}),
+         _both({"name": "move_by_offset", "args": {"dxyz": [f"$dx({O}, {P})", f"$dy({O}, {P})", 0.0]}}),
+         _both({"name": "move_by_offset", "args": {"dxyz": [0.0, 0.0, -CARRY_LIFT_M]}}),
+         _both({"name": "open_gripper", "args": {}}),
+         _both({"name": "move_by_offset", "args": {"dxyz": [0.0, 0.0, 0.06]}}),
+         _both({"name": "back", "args": {}})], 700,
+        "both arms take a flat object by its side rims, lift it a little, carry it to the region's centre, "
+        "set it down, open and back away (one dual action per step)"),
 ]
 
-TABLETOP_DOMAIN = Domain(predicates=PREDICATES, operators=OPERATORS)
+TABLETOP_DOMAIN = Domain(predicates=PREDICATES, operators=OPERATORS,
+                         relative_places={"beside_left": (0.0, BESIDE_M), "beside_right": (0.0, -BESIDE_M)},
+                         max_grasp_width_m=0.10,
+                         directions={"away": 0.0, "toward": 180.0, "leftward": 90.0, "rightward": -90.0})

@@ -72,7 +72,7 @@ class AgentChord:
         steps_per_tick = max(1, round(cfg.sim.control_dt_s / cfg.sim.timestep_s))
         try:
             first = robot.observation(images=self.ctx.reasoner.backend != "embedded")
-            compiled = compile_graph(reasoner, self.ctx.task, first, arranger=self.arranger)
+            compiled = compile_graph(reasoner, self.ctx.task, first, arranger=self.arranger, cfg=cfg)
             planning_calls = len(reasoner.records)
             keyframes = TabletopKeyframes(cfg)
             t0 = time.perf_counter()

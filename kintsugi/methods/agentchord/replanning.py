@@ -94,7 +94,7 @@ class Replanning:
         obs = self.robot.observation(images=self.images)
         goal = [g for g in self.ctx.task.goal if g not in self.done] or None
         compiled = compile_graph(self.reasoner, self.ctx.task, obs, arranger=self.style == "code-as-monitor",
-                                 goal=goal)
+                                 goal=goal, cfg=self.ctx.cfg)
         graph = compiled.graph
         if self.style == "code-as-monitor":  # detect only: the reasoner is asked again instead of a branch
             graph = TaskGraph.from_data({**graph.model_dump(), "nodes": [n.model_dump() for n in graph.nodes

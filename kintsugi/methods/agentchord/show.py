@@ -26,10 +26,11 @@ def compile_for_task(task: str, condition: str, seed: int, overrides: dict, sett
         raise ConfigError(f"task {task!r} has no task graph: graphs are compiled for the tabletop (system B) "
                           f"tasks: {known}")
     reasoner = RecordingReasoner(make_reasoner(settings))
-    world, _, _, _ = t.build(t.config(overrides), condition, seed)
+    cfg = t.config(overrides)
+    world, _, _, _ = t.build(cfg, condition, seed)
     try:
         robot = TabletopRobot(world)
-        return compile_graph(reasoner, t.spec, robot.observation(images=settings.backend != "embedded"))
+        return compile_graph(reasoner, t.spec, robot.observation(images=settings.backend != "embedded"), cfg=cfg)
     finally:
         world.close()
 
