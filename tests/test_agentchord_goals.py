@@ -1,0 +1,107 @@
+"""The embedded composer plans the region, handover and container goals of rearrange-table, handover-block and
+coffee-tray from the goal text and perceived features (synthetic, no physics): the plan's operators, the filled
+action arguments (region centres, the head turn), and the arranger's monitors for those edges."""
+
+from __future__ import annotations
+
+import pytest
+
+from kintsugi.methods.agentchord.domain import BESIDE_M, TABLETOP_DOMAIN
+from kintsugi.reasoning.arranger import embedded_arrange
+from kintsugi.reasoning.composer import embedded_compose
+from kintsugi.reasoning.symbolic import PlanningError
+from kintsugi.reasoning.taskgraph_types import ArrangerRequest, ComposerRequest, SeenArm, SeenObject, parse_atom
+
+ARMS = [SeenArm(name="left", tcp_pos=(0.3, 0.3, 0.3), gripper_opening_m=0.1, gripper_closed=False),
+        SeenArm(name="right", tcp_pos=(0.3, -0.3, 0.3), gripper_opening_m=0.1, gripper_closed=False)]
+
+
+def _lying(name: str, xy: tuple[float, float], head_dx: float, length: float = 0.18) -> SeenObject:
+    """A utensil lying along x; its head (the end nearer the centroid) at +x when head_dx > 0."""
+    x, y = xy
+    return SeenObject(name=name, visible=True, centroid=(x, y, 0.006), top_z=0.012, bottom_z=0.0,
+                      upright=False, extent=(length, 0.02, 0.012),
+                      extremes={"axis_pos": (x + head_dx * 0.06, y, 0.006), "axis_neg": (x - head_dx * 0.12, y, 0.006)})
+
+
+def _box(name: str, xy: tuple[float, float], size: tuple[float, float, float], upright: bool | None = None) -> SeenObject:
+    x, y = xy
+    return SeenObject(name=name, visible=True, centroid=(x, y, size[2] / 2), top_z=size[2], bottom_z=0.0,
+                      upright=upright, extent=size)
+
+
+def _compose(task: str, goal: list[str], objects: list[SeenObject], regions: dict | None = None):
+    return embedded_compose(ComposerRequest(task=task, goal=goal, objects=objects, arms=ARMS,
+                                            domain=TABLETOP_DOMAIN, regions=regions or {}))
+
+
+def _ops(reply) -> list[str]:
+    return [reply.edge_operators[e["id"]] for e in reply.graph["edges"]]
+
+
+def test_place_terms_parse_as_one_constant() -> None:
+    assert parse_atom("in_region(fork, beside_left(plate))") == (True, "in_region", ("fork", "beside_left(plate)"))
+    with pytest.raises(ValueError, match="not a literal"):
+        parse_atom("in_region(fork, beside(left(plate)))")
+
+
+def test_rearrange_goal_plans_carry_turn_place_per_utensil() -> None:
+    plate = _box("plate", (0.5, 0.0), (0.2, 0.2, 0.016), upright=True)
+    fork = _lying("fork", (0.4, 0.25), head_dx=-1.0)  # head towards the robot: must turn 180 deg
+    spoon = _lying("spoon", (0.4, -0.25), head_dx=1.0)  # already heading away
+    goal = ["in_region(fork, beside_left(plate))", "in_region(spoon, beside_right(plate))", "flat(fork)",
+            "flat(spoon)", "heading(fork, away)", "heading(spoon, away)", "released(fork)", "released(spoon)"]
+    reply = _compose("Use the left arm for the fork and the right arm for the spoon.", goal, [plate, fork, spoon])
+    ops = _ops(reply)
+    assert "turn_heading(left, fork, away, beside_left(plate))" in ops
+    assert not any(o.startswith("turn_heading(right, spoon") for o in ops)  # its head already points away
+    assert "place_at(left, fork, beside_left(plate))" in ops and "place_at(right, spoon, beside_right(plate))" in ops
+    acts = {e["description"]: e["actions"] for e in reply.graph["edges"]}
+    place = acts["place_at(left, fork, beside_left(plate))"][0]["args"]
+    assert place["x"] == pytest.approx(0.5) and place["y"] == pytest.approx(BESIDE_M)
+    turn = acts["turn_heading(left, fork, away, beside_left(plate))"][0]["args"]["angle_deg"]
+    assert abs(abs(turn) - 180.0) < 1e-6
+    # The turn comes after the carry over the region (the wrist runs out of range near the shoulder).
+    assert ops.index("carry_to(left, fork, beside_left(plate))") < ops.index("turn_heading(left, fork, away, "
+                                                                             "beside_left(plate))")
+
+
+def test_handover_goal_plans_take_then_let_go_and_place_in_the_named_region() -> None:
+    block = _box("block", (0.4, 0.2), (0.05, 0.05, 0.05), upright=True)
+    goal = ["handed_over(block, left, right)", "not dropped(block)", "in_region(block, target)", "flat(block)",
+            "released(block)"]
+    reply = _compose("Pick up the block with the left arm, hand it over to the right arm, and place it.", goal,
+                     [block], {"target": (0.40, -0.25)})
+    assert _ops(reply) == ["grasp(left, block)", "lift(left, block)", "take_over(right, left, block)",
+                           "let_go(left, right, block)", "carry_to(right, block, target)", "place_at(right, block, target)"]
+    req = ArrangerRequest(task="hand over", graph=reply.graph, node_facts=reply.node_facts,
+                          edge_operators=reply.edge_operators, objects=[block], arms=ARMS, domain=TABLETOP_DOMAIN,
+                          regions={"target": (0.40, -0.25)})
+    watched = {(p["edge"], p["monitor"]["failure_mode"], p["monitor"]["check"].get("arm"))
+               for p in embedded_arrange(req).proposals}
+    assert ("e3_take_over", "drop", "left") in watched  # the giver still holds it while the taker comes in
+    assert not any(e == "e4_let_go" and m == "drop" and a == "left" for e, m, a in watched)  # lets go on purpose
+    assert ("e5_carry_to", "drop", "right") in watched
+
+
+def test_unknown_region_is_a_planning_error_naming_it() -> None:
+    block = _box("block", (0.4, 0.2), (0.05, 0.05, 0.05), upright=True)
+    with pytest.raises(PlanningError, match="'target'"):
+        _compose("place the block", ["in_region(block, target)"], [block])
+
+
+def test_coffee_goal_puts_the_capsule_in_first_and_carries_the_wide_tray_with_both_arms() -> None:
+    capsule = _box("capsule", (0.35, 0.25), (0.03, 0.03, 0.05), upright=True)
+    tray = _box("tray", (0.40, 0.0), (0.22, 0.16, 0.04), upright=None)
+    goal = ["inside(capsule, tray)", "upright(capsule)", "in_region(tray, tray_forward)", "flat(tray)",
+            "released(capsule)", "released(tray)"]
+    reply = _compose("Put the capsule into the tray with the left arm, then carry the tray with both arms.", goal,
+                     [capsule, tray], {"tray_forward": (0.56, 0.0)})
+    assert _ops(reply) == ["grasp(left, capsule)", "lift(left, capsule)", "put_inside(left, capsule, tray)",
+                           "carry_both(tray, tray_forward)"]
+    carry = reply.graph["edges"][-1]["actions"]
+    assert all(a["name"] == "drive" for a in carry)
+    move = carry[2]["args"]
+    assert move["left"]["dxyz"][:2] == pytest.approx([0.16, 0.0]) == move["right"]["dxyz"][:2]
+    rims = carry[0]["args"]
+    assert rims["left"]["grasp_offset"][1] == pytest.approx(0.077) and rims["right"]["grasp_offset"][1] == pytest.approx(-0.077)
