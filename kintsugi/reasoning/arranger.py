@@ -23,7 +23,7 @@ from kintsugi.taskgraph.base import GraphError
 from kintsugi.taskgraph.forward import FilterResult, cost_to_go, forward_filter
 from kintsugi.taskgraph.model import TaskGraph
 
-CARRY_ACTIONS = frozenset({"move_by_offset", "move_to_obj", "move_to_target", "rotate_eef"})
+CARRY_ACTIONS = frozenset({"move_by_offset", "move_to_obj", "move_to_target", "rotate_eef", "drive"})
 """Atomic actions during which a held object can be dropped or slip (`place` lets go on purpose, so an empty
 hand after it is no failure; a placed object that fell over is the goal check's to see)."""
 EMPTY_GRIP_M = 0.01
@@ -57,11 +57,13 @@ def _drop(s: State, arm: str, obj: str) -> State:
     """The object fell: the hand is empty (the gripper closes on nothing), the object lies on the table,
     nothing about it being lifted, over or tilted holds; we assume it landed upright (if it toppled, the
     `toppled` monitor of the next grasp sees it)."""
+    holders = {a[1] for a in s if a[0] == "holding" and a[2] == obj} | {arm}
     keep = {a for a in s if not (a[0] in ("holding",) and a[1] == arm)
+            and not (a[0] == "holding" and a[2] == obj)  # an object two arms carry falls from both
             and not (a[0] in ("lifted", "over", "over_place", "tilted") and a[1] == obj)}
     # A lying object (a fork, a block) lands lying, keeping its heading; anything else we assume upright.
     pose = ("flat", obj) if ("flat", obj) in s and ("upright", obj) not in s else ("upright", obj)
-    return frozenset(keep | {("hand_empty", arm), ("on_table", obj), ("released", obj), pose})
+    return frozenset(keep | {("hand_empty", a) for a in holders} | {("on_table", obj), ("released", obj), pose})
 
 
 def _unchanged(s: State, arm: str, obj: str) -> State:
@@ -117,7 +119,10 @@ def _candidates(mode: FailureMode, edge: Any, u: State, v: State | None = None) 
     if not kinds & mode.actions:
         return []
     if mode.needs == "held":  # an edge that lets go on purpose (a handover's giver) is not watched for a drop
-        return sorted((a[1], a[2]) for a in u if a[0] == "holding" and (v is None or a in v))
+        held = [(a[1], a[2]) for a in u if a[0] == "holding" and (v is None or a in v)]
+        if mode.name == "slip":  # two arms hold a wide object by its rims, far from its centroid by design
+            held = [(arm, o) for arm, o in held if sum(1 for _, p in held if p == o) == 1]
+        return sorted(held)
     out = []
     for a in edge.actions:
         if a.name in mode.actions and isinstance(a.args.get("arm"), str) and isinstance(a.args.get("obj"), str):
@@ -173,7 +178,7 @@ def _branch(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: Failure
         last = i == len(steps)
         target = merge if last else f"r.{tag}.{i}"
         if not last:
-            constraints, gripper = node_constraints(request.domain, sorted(after - state), seen)
+            constraints, gripper = node_constraints(request.domain, sorted(after - state), seen, where)
             nodes.append({"id": target, "description": f"recovering from {mode.name}: {op.label} done",
                           "constraints": constraints, "gripper": gripper})
         edges.append({"id": f"re.{tag}.{i}", "source": prev, "target": target, "actions": edge_actions(op, seen, where),

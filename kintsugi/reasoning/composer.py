@@ -25,7 +25,7 @@ UPRIGHT_HEIGHT_RATIO = 0.6
 """Undecided uprightness: a standing cup is ~0.7 as tall as its largest extent, a fallen bottle ~0.3."""
 LIFTED_Z_M = 0.05
 """A held object whose lowest point is this high is clear of the table."""
-_FN = re.compile(r"^\$(x|y|z|hy|nhy|rx|ry|mirror)\(\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*(?:,\s*(-?[0-9.eE+-]+)\s*)?\)$")
+_FN = re.compile(r"^\$(x|y|z|hy|nhy|rx|ry|mirror)\(\s*(\?[A-Za-z0-9_]+)\s*(?:,\s*(-?[0-9.eE+-]+)\s*)?\)$")
 _FN2 = re.compile(r"^\$(dx|dy|turn)\(\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*,\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*\)$")
 FLAT_RATIO = 1.1
 """An object no taller than this times its middle extent lies flat (a fork, a tray, a cube; not a standing bottle)."""
@@ -172,8 +172,12 @@ def instructed_ops(task: str, domain: Any, arms: list[str], objects: list[str], 
     bound, up = arm_bindings(task, arms, objects), held_up(task, objects)
     out = []
     for op in ground(domain, arms, objects, places):
+        takers: dict[str, int] = {}
+        for a in op.add:
+            if a[0] == "holding":
+                takers[a[2]] = takers.get(a[2], 0) + 1
         if any(a[0] == "holding" and a[2] in bound and bound[a[2]] != a[1] and ("released", a[2]) in op.pre_pos
-               for a in op.add):
+               and takers[a[2]] == 1 for a in op.add):  # a two-arm take is not the other arm taking it alone
             continue
         targets = {a[2] for a in op.add if len(a) == 3 and a[1] in objects and a[2] in up}
         if targets:
@@ -254,7 +258,8 @@ def _positional(binding: dict[str, str], args: tuple[str, ...]) -> dict[str, str
     return {f"?{i + 1}": v for i, v in enumerate(args)}
 
 
-def node_constraints(domain: Domain, atoms: list[Atom], seen: dict[str, SeenObject]) -> tuple[list, dict]:
+def node_constraints(domain: Domain, atoms: list[Atom], seen: dict[str, SeenObject], where: Any = None
+                     ) -> tuple[list, dict]:
     """Constraints and gripper states checking the given facts on a sub-goal node."""
     specs = {p.name: p for p in domain.predicates}
     constraints: list = []
@@ -262,7 +267,7 @@ def node_constraints(domain: Domain, atoms: list[Atom], seen: dict[str, SeenObje
     for a in atoms:
         spec = specs[a[0]]
         b = _positional({}, a[1:])
-        constraints += [fill(c, b, seen) for c in spec.constraints]
+        constraints += [fill(c, b, seen, where) for c in spec.constraints]
         if spec.gripper is not None and spec.params and spec.params[0] == "arm":
             gripper[a[1]] = spec.gripper
     return constraints, gripper
@@ -288,7 +293,7 @@ def build_graph(task: str, domain: Domain, initial: State, steps: list[GroundOp]
         made = sorted(after - state)
         if i == len(steps):
             made = sorted(set(made) | set(goal))
-        constraints, gripper = node_constraints(domain, made, seen)
+        constraints, gripper = node_constraints(domain, made, seen, where)
         nid, eid = f"s{i}_{op.name}", f"e{i}_{op.name}"
         nodes.append({"id": nid, "description": ", ".join(atom_text(a) for a in made) or op.label,
                       "constraints": constraints, "gripper": gripper})

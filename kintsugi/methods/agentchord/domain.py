@@ -39,6 +39,8 @@ RIM_INSET_M = 0.003
 """Two-arm carry: each arm takes a side rim this far forward of the centre, this high, this far inside the
 perceived side (half a wall)."""
 CARRY_LIFT_M = 0.03
+REGION_TOL_M = 0.04
+"""A sub-goal `in_region` holds when the perceived centroid is this close (x and y) to the region's centre."""
 
 
 def _p(name, params, meaning, constraints=(), gripper=None) -> PredicateSpec:  # noqa: ANN001
@@ -69,7 +71,10 @@ PREDICATES = [
     _p("region", ["place"], "the place is a region of the table (static)"),
     _p("direction", ["place"], "the place is a direction a heading goal may name (static)"),
     _p("over_place", ["object", "place"], "the held object is carried above the region"),
-    _p("in_region", ["object", "place"], "the object's centre lies in the region"),
+    _p("in_region", ["object", "place"], "the object's centre lies in the region",
+       [{"kind": "in_region", "point": {"entity": "?1"}, "lo": [f"$rx(?2, -{REGION_TOL_M})", f"$ry(?2, -{REGION_TOL_M})",
+                                                                -1.0],
+         "hi": [f"$rx(?2, {REGION_TOL_M})", f"$ry(?2, {REGION_TOL_M})", 2.0]}]),
     _p("heading", ["object", "place"], "the lying object's head points in the direction"),
     _p("handed_over", ["object", "arm", "arm"], "the first arm held the object, then the second took it (history)"),
     _p("dropped", ["object"], "the object fell from a gripper (history; no action makes it)"),
