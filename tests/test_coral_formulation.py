@@ -138,3 +138,10 @@ def test_formulation_over_the_openai_protocol_repairs_refused_code_once() -> Non
     assert program.has("push_cost") and reply.stages[-1].press_n == 5.0
     assert "cost code refused" in json.dumps(second["messages"])  # the repair round quoted the sandbox
     assert rec.records[0].role == "formulate" and rec.records[0].attempts == 2
+
+
+def test_the_press_lasts_as_long_as_the_instruction_says() -> None:
+    timed = request("Push the box against the wall and press it with 4 N for 3.5 seconds.", [BOX], [WALL])
+    assert compose(timed).knobs["hold_press_s"] == 3.5
+    untimed = request("Push the box against the wall and press it with 4 N.", [BOX], [WALL])
+    assert compose(untimed).knobs["hold_press_s"] == 2.0  # the library's default when the text names none

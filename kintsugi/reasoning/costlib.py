@@ -73,6 +73,12 @@ def force_n(text: str) -> float | None:
     return float(m.group(1)) if m else None
 
 
+def duration_s(text: str) -> float | None:
+    """'for 2 seconds', 'for 1.5 s': how long the instruction asks a press to last."""
+    m = re.search(r"for\s+(\d+(?:\.\d+)?)\s*(?:s|secs?|seconds?)\b", text.lower())
+    return float(m.group(1)) if m else None
+
+
 def tall(o: ObjectState) -> bool:
     """Stands on a small face: taller than it is wide, and upright."""
     return o.size_m[2] > max(o.size_m[0], o.size_m[1]) and o.upright_deg < 30
@@ -134,6 +140,8 @@ def compose(req: FormulationRequest, knobs: dict[str, float] | None = None) -> F
             raise NotUnderstood("a push 'against' something needs a fixture in the scene; there is none")
         _push(plan, o, fixture, axis, sign, k, contact)
         f = force_n(req.task)
+        if duration_s(req.task) is not None:  # the instruction's duration, else the library's default
+            k["hold_press_s"] = duration_s(req.task)
         if f is not None:
             _press(plan, o, fixture, axis, sign, f, k, contact)
     elif "pick" in text or "lift" in text:
