@@ -16,24 +16,14 @@ from __future__ import annotations
 
 from typing import Any
 
-from pydantic import Field
-
-from kintsugi.config import StrictModel, apply_overrides
+from kintsugi.campaign.suite import Suite
+from kintsugi.config import apply_overrides
 from kintsugi.errors import UnknownNameError
 from kintsugi.tasks.peg.config import RECOVERY_SKILL_NAMES, PegTaskConfig
 
 
-class Suite(StrictModel):
-    name: str
-    description: str
-    methods: tuple[str, ...]
-    shapes: tuple[str, ...]
-    conditions: tuple[str, ...]
-    trials: int = Field(ge=1)
-    overrides: dict[str, Any]
-    """Dotted peg config overrides, as `--set` takes them."""
-    companion: str | None = None
-    """The suite to run beside this one for comparison (same world, other options)."""
+class PegSuite(Suite):
+    """A peg-insertion suite; `config()` is its world, for checks of the suite itself."""
 
     def config(self) -> PegTaskConfig:
         return apply_overrides(PegTaskConfig(), self.overrides)
@@ -49,17 +39,17 @@ OPTIONS_ON: dict[str, Any] = {"recovery.skills": list(RECOVERY_SKILL_NAMES), "ca
 OPTIONS_OFF: dict[str, Any] = {"recovery.skills": ["fit", "align", "insert"], "camera.side_view": False}
 _CELLS = dict(shapes=("round", "square", "rectangle"), conditions=("all",), trials=30)
 
-SUITES: dict[str, Suite] = {
+SUITES: dict[str, PegSuite] = {
     s.name: s
     for s in (
-        Suite(
+        PegSuite(
             name="stretch",
             description="grasp +-10 deg, hole +-30 mm, friction x1-10, clearance 1 mm; "
                         "recovery may re-approach and sees a side camera",
             methods=("baseline", "recovery"), overrides=STRETCH_WORLD | OPTIONS_ON, companion="stretch-paper",
             **_CELLS,
         ),
-        Suite(
+        PegSuite(
             name="stretch-paper",
             description="the stretch world with the paper's method as published (CF2..CF4 plans, one camera)",
             methods=("recovery",), overrides=STRETCH_WORLD | OPTIONS_OFF, companion="stretch",
@@ -69,7 +59,7 @@ SUITES: dict[str, Suite] = {
 }
 
 
-def suite(name: str) -> Suite:
+def suite(name: str) -> PegSuite:
     try:
         return SUITES[name]
     except KeyError:

@@ -8,27 +8,11 @@ Table I tasks and prints the table with Wilson intervals. A user's `--set` overr
 
 from __future__ import annotations
 
-from typing import Any
 
-from pydantic import Field
-
-from kintsugi.config import StrictModel
+from kintsugi.campaign.suite import Suite
 
 TABLE1_METHODS = ("inner-monologue", "doremi", "rekep", "code-as-monitor", "agentchord-bt", "agentchord")
 """The paper's Table I columns (IM, DoReMi, ReKep, CaM, AgentChord) plus the AC-BT ablation."""
-
-
-class Suite(StrictModel):
-    name: str
-    description: str
-    methods: tuple[str, ...]
-    shapes: tuple[str, ...]
-    """Variants (the CLI's --shapes/--variants)."""
-    conditions: tuple[str, ...]
-    trials: int = Field(ge=1)
-    overrides: dict[str, Any]
-    """Dotted tabletop config overrides, as `--set` takes them."""
-    companion: str | None = None
 
 
 def _table1(p: float, name: str, companion: str) -> Suite:
