@@ -19,19 +19,12 @@ import mujoco
 import numpy as np
 
 from kintsugi.config import StrictModel
-from kintsugi.errors import SimulationDiverged, UnknownNameError
+from kintsugi.errors import UnknownNameError
+from kintsugi.physics import check_health
 from kintsugi.tasks.contact.config import ContactConfig
 from kintsugi.tasks.contact.objects import Fixture, Geometry, Marker, Physics, Placement
 from kintsugi.tasks.contact.scene import ACTUATORS, EE_JOINTS, FINGERS, build_mjcf
 
-_FATAL_WARNINGS = (
-    mujoco.mjtWarning.mjWARN_BADQACC,
-    mujoco.mjtWarning.mjWARN_BADQPOS,
-    mujoco.mjtWarning.mjWARN_BADQVEL,
-    mujoco.mjtWarning.mjWARN_CONTACTFULL,
-    mujoco.mjtWarning.mjWARN_CNSTRFULL,
-)
-_FATAL_INDEX = np.array([int(w) for w in _FATAL_WARNINGS])
 GRAVITY = 9.81
 
 
@@ -138,13 +131,7 @@ class ContactWorld:
         self.check_health()
 
     def check_health(self) -> None:
-        counts = self.data.warning.number[_FATAL_INDEX]
-        if counts.any():
-            w = _FATAL_WARNINGS[int(np.flatnonzero(counts)[0])]
-            raise SimulationDiverged(f"MuJoCo warning {w.name} at t={self.data.time:.3f}s; "
-                                     "lower sim.timestep_s or raise sim.contact_timeconst_s")
-        if not np.isfinite(self.data.qpos).all() or not np.isfinite(self.data.qvel).all():
-            raise SimulationDiverged(f"non-finite state at t={self.data.time:.3f}s")
+        check_health(self.data)
 
     @property
     def ctrlrange(self) -> np.ndarray:

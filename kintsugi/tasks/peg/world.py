@@ -22,7 +22,8 @@ import mujoco
 import numpy as np
 
 from kintsugi.config import StrictModel
-from kintsugi.errors import ConfigError, SimulationDiverged, UnknownNameError
+from kintsugi.errors import ConfigError, UnknownNameError
+from kintsugi.physics import check_health
 from kintsugi.reasoning.types import CameraCalibration
 from kintsugi.tasks.peg.config import PegTaskConfig
 from kintsugi.tasks.peg.scene import build_mjcf
@@ -31,14 +32,6 @@ from kintsugi.tasks.peg.shapes import MM, gap_along, hole_for, peg_shape
 
 HOME_POSE = np.array([-0.05, 0.16, 0.0])  # y, z (m), roll (rad)
 SIDE_HIDES_GROUP, MAIN_HIDES_GROUP = 1, 2  # each camera hides the other's painted rim (seen edge-on)
-_FATAL_WARNINGS = (
-    mujoco.mjtWarning.mjWARN_BADQACC,
-    mujoco.mjtWarning.mjWARN_BADQPOS,
-    mujoco.mjtWarning.mjWARN_BADQVEL,
-    mujoco.mjtWarning.mjWARN_CONTACTFULL,
-    mujoco.mjtWarning.mjWARN_CNSTRFULL,
-)
-_FATAL_INDEX = np.array([int(w) for w in _FATAL_WARNINGS])
 
 
 class TrialParams(StrictModel):
@@ -133,15 +126,7 @@ class PegWorld:
         self.check_health()
 
     def check_health(self) -> None:
-        counts = self.data.warning.number[_FATAL_INDEX]
-        if counts.any():
-            w = _FATAL_WARNINGS[int(np.flatnonzero(counts)[0])]
-            raise SimulationDiverged(
-                f"MuJoCo warning {w.name} at t={self.data.time:.3f}s; lower sim.timestep_s "
-                "or raise sim.contact_timeconst_s"
-            )
-        if not np.isfinite(self.data.qpos).all():
-            raise SimulationDiverged(f"non-finite state at t={self.data.time:.3f}s")
+        check_health(self.data)
 
     # --- robot-side sensing ---------------------------------------------
     def base_pose(self) -> np.ndarray:

@@ -16,21 +16,14 @@ import mujoco
 import numpy as np
 
 from kintsugi.config import StrictModel
-from kintsugi.errors import SimulationDiverged, UnknownNameError
+from kintsugi.errors import UnknownNameError
+from kintsugi.physics import check_health
 from kintsugi.perception.features import SegDepthRenderer
 from kintsugi.tasks.tabletop.arm_model import JOINTS
 from kintsugi.tasks.tabletop.config import ARMS, TabletopConfig
 from kintsugi.tasks.tabletop.objects import Shape, shape_of
 from kintsugi.tasks.tabletop.scene import CAMERAS, SceneExtra, build_scene_xml
 
-_FATAL_WARNINGS = (
-    mujoco.mjtWarning.mjWARN_BADQACC,
-    mujoco.mjtWarning.mjWARN_BADQPOS,
-    mujoco.mjtWarning.mjWARN_BADQVEL,
-    mujoco.mjtWarning.mjWARN_CONTACTFULL,
-    mujoco.mjtWarning.mjWARN_CNSTRFULL,
-)
-_FATAL_INDEX = np.array([int(w) for w in _FATAL_WARNINGS])
 View = Literal["rgb", "depth", "seg"]
 
 
@@ -163,13 +156,7 @@ class TabletopWorld:
             watch(self)
 
     def check_health(self) -> None:
-        counts = self.data.warning.number[_FATAL_INDEX]
-        if counts.any():
-            w = _FATAL_WARNINGS[int(np.flatnonzero(counts)[0])]
-            raise SimulationDiverged(f"MuJoCo warning {w.name} at t={self.data.time:.3f}s; "
-                                     "lower sim.timestep_s or raise sim.contact_timeconst_s")
-        if not np.isfinite(self.data.qpos).all() or not np.isfinite(self.data.qvel).all():
-            raise SimulationDiverged(f"non-finite state at t={self.data.time:.3f}s")
+        check_health(self.data)
 
     # --- commands ------------------------------------------------------------
     def set_joint_targets(self, arm: str, q: np.ndarray) -> None:
