@@ -16,6 +16,7 @@ from kintsugi.control import MPPI, MPPIConfig
 from kintsugi.tasks.contact.config import ContactConfig
 from kintsugi.tasks.contact.costs import View
 from kintsugi.tasks.contact.fsm import Stage, StageFactory, StageMachine, Transition
+from kintsugi.tasks.contact.plot import PlanSeries
 from kintsugi.tasks.contact.robot import ContactRobot, Observation
 from kintsugi.tasks.contact.scene import ACTUATORS
 from kintsugi.tasks.contact.world import PlanningWorld
@@ -25,14 +26,9 @@ GRIP = ACTUATORS.index("grip")
 
 
 @dataclass
-class PlanTrace:
-    """Per planning step: sim time, stage, lowest cost, temperature, ESS fraction, best predicted TCP path."""
+class PlanTrace(PlanSeries):
+    """The planner statistics (PlanSeries) plus, per step, the best predicted TCP path and the iteration time."""
 
-    t: list[float] = field(default_factory=list)
-    stage: list[str] = field(default_factory=list)
-    cost: list[float] = field(default_factory=list)
-    temperature: list[float] = field(default_factory=list)
-    ess_frac: list[float] = field(default_factory=list)
     best_tcp: list[np.ndarray] = field(default_factory=list)
     iteration_s: list[float] = field(default_factory=list)
     rollout_s: list[float] = field(default_factory=list)
@@ -112,11 +108,7 @@ class StagedPlanner:
 
     def _record(self, stage: Stage, obs: Observation) -> None:
         s, tr = self.mppi.last, self.trace
-        tr.t.append(obs.t)
-        tr.stage.append(stage.name)
-        tr.cost.append(s.cost_min)
-        tr.temperature.append(s.temperature)
-        tr.ess_frac.append(s.ess / max(1, s.n_valid))
+        tr.add(obs.t, stage.name, s.cost_min, s.temperature, s.ess / max(1, s.n_valid))
         if self._stats is not None:
             self._stats(obs.t, stage.name, tr.cost[-1], tr.temperature[-1], tr.ess_frac[-1])
         batch = self.mppi.last_batch
