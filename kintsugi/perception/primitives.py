@@ -392,7 +392,7 @@ def fit_primitive(
             tried.append((fit, c))
             if c <= max_contradiction:
                 accepted.append((fit, c))
-                if _good(fit, s) and c <= max_contradiction / 5:
+                if _good(fit, s) and c <= max_contradiction / 2:
                     return True
         return False
 
