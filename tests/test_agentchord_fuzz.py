@@ -186,7 +186,9 @@ def a_flood(d, rng):
 ARRANGER_MUTATIONS = [m_drop_field, m_wrong_type, m_junk_key, m_hostile_args, m_unknown_action, m_nan, a_backward,
                       a_unreachable_merge, a_recovery_cycle, a_unknown_edge, a_wrong_context, a_bad_monitor,
                       a_monitor_on_recovery, a_flood]
-REPAIRABLE = {a_backward, a_unreachable_merge}
+REPAIRABLE = {a_backward, a_unreachable_merge, m_drop_field}
+"""m_drop_field may delete one edge of a recovery chain: its recovery node then never merges, and Eq. 8's
+filter drops that branch (a repair, as for an unreachable merge)."""
 
 
 def _text(rng, base: str) -> str:

@@ -23,9 +23,9 @@ from kintsugi.taskgraph.base import GraphError
 from kintsugi.taskgraph.forward import FilterResult, cost_to_go, forward_filter
 from kintsugi.taskgraph.model import TaskGraph
 
-CARRY_ACTIONS = frozenset({"move_by_offset", "move_to_obj", "move_to_target", "rotate_eef", "drive"})
-"""Atomic actions during which a held object can be dropped or slip (`place` lets go on purpose, so an empty
-hand after it is no failure; a placed object that fell over is the goal check's to see)."""
+CARRY_ACTIONS = frozenset({"move_by_offset", "move_to_obj", "move_to_target", "rotate_eef", "drive", "place"})
+"""Atomic actions during which a held object can be dropped or slip (`place` lets go on purpose: it is watched
+only while the hand is still commanded closed)."""
 EMPTY_GRIP_M = 0.01
 """Fingers closed to less than this have nothing between them (every graspable object is wider)."""
 SLIP_TOL_M = 0.08
@@ -66,6 +66,22 @@ def _drop(s: State, arm: str, obj: str) -> State:
     return frozenset(keep | {("hand_empty", a) for a in holders} | {("on_table", obj), ("released", obj), pose})
 
 
+LANDED_DEG = 15.0
+"""After a fall, an object whose axis is within this of vertical landed standing (the `upright` predicate's
+tolerance), else lying (or leaning: it is stood up the same way)."""
+
+
+def outcomes(mode: FailureMode, s: State, arm: str, obj: str) -> list[tuple[str, State, list[dict]]]:
+    """What the failure may leave, each with the guard (over perceived features) that tells it apart at run
+    time: an object that stands on a base (`stands`) and falls may land standing or lying on its side."""
+    after = mode.after(s, arm, obj)
+    if mode.after is not _drop or ("stands", obj) not in s:
+        return [("", after, [])]
+    lying = frozenset(a for a in after if a != ("upright", obj))
+    return [("standing", after, [{"kind": "upright", "object": obj, "tol_deg": LANDED_DEG}]),
+            ("lying", lying, [{"kind": "tilted", "object": obj, "min_deg": LANDED_DEG}])]
+
+
 def _unchanged(s: State, arm: str, obj: str) -> State:
     return s
 
@@ -88,7 +104,7 @@ FAILURES: tuple[FailureMode, ...] = (
     FailureMode("drop", CARRY_ACTIONS, "held",
                 lambda arm, obj: {"kind": "touching", "arm": arm, "object": obj, "expect": True}, 0.0, 3, _drop,
                 "the held object fell out of the hand (the finger pads no longer touch it): pick it up and carry on"),
-    FailureMode("slip", CARRY_ACTIONS, "held",
+    FailureMode("slip", CARRY_ACTIONS - {"place"}, "held",
                 lambda arm, obj: {"kind": "detached", "arm": arm, "object": obj, "tol": SLIP_TOL_M}, 0.01, 5, _drop,
                 "the held object slid out of the grasp point: treat as dropped, pick it up and carry on"),
 )
@@ -119,7 +135,7 @@ def _candidates(mode: FailureMode, edge: Any, u: State, v: State | None = None) 
     if not kinds & mode.actions:
         return []
     if mode.needs == "held":  # an edge that lets go on purpose (a handover's giver) is not watched for a drop
-        held = [(a[1], a[2]) for a in u if a[0] == "holding" and (v is None or a in v)]
+        held = [(a[1], a[2]) for a in u if a[0] == "holding" and (v is None or a in v or _placed_by(edge, a[1]))]
         if mode.name == "slip":  # two arms hold a wide object by its rims, far from its centroid by design
             held = [(arm, o) for arm, o in held if sum(1 for _, p in held if p == o) == 1]
         return sorted(held)
@@ -130,6 +146,12 @@ def _candidates(mode: FailureMode, edge: Any, u: State, v: State | None = None) 
                 continue  # only what stands can topple (a lying fork's axis is horizontal by design)
             out.append((a.args["arm"], a.args["obj"]))
     return out
+
+
+def _placed_by(edge: Any, arm: str) -> bool:
+    """The edge lets the arm's object go by a `place` (lowered, then released): a drop before the release is a
+    failure (watched while the hand is commanded closed, `touching.while_closed`)."""
+    return any(a.name == "place" and a.args.get("arm") == arm for a in edge.actions)
 
 
 def _merge(start: State, edge: Any, graph: TaskGraph, facts: dict[str, State], ops: list,
@@ -156,23 +178,55 @@ def _merge(start: State, edge: Any, graph: TaskGraph, facts: dict[str, State], o
 
 
 def _branch(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: FailureMode, arm: str, obj: str,
-            start: State, facts: dict[str, State], ops: list, ctg: dict[str, float],
-            seen: dict[str, SeenObject], where: Any = None) -> dict:
-    """One RecoveryProposal: monitor, recovery nodes and edges from the failure context to the merge node."""
+            u: State, facts: dict[str, State], ops: list, ctg: dict[str, float],
+            seen: dict[str, SeenObject], where: Any = None, releases: bool = False) -> dict:
+    """One RecoveryProposal: monitor, recovery nodes and edges from the failure context to the merge node.
+    With more than one possible outcome (`outcomes`), a hub node where the object has come to rest branches
+    into one guarded chain per outcome. `releases`: the edge opens the hand on purpose (watch up to then)."""
+    tag = f"{edge.id}.{mode.name}.{arm}"
+    check = mode.check(arm, obj)
+    if releases:
+        check = {**check, "while_closed": True}
+    outs = outcomes(mode, u, arm, obj)
+    if len(outs) == 1:
+        nodes, edges = _chain(request, graph, edge, mode, arm, tag, edge.source, outs[0][1], [], facts, ops, ctg,
+                              seen, where)
+    else:
+        hub = f"r.{tag}.0"
+        nodes = [{"id": hub, "description": f"after {mode.name}: {obj} at rest, released"}]
+        edges = [{"id": f"re.{tag}.0", "source": edge.source, "target": hub, "cost": RELEASE_COST,
+                  "actions": [{"name": "open_gripper", "args": {"arm": arm}}],
+                  "description": f"recovery for {mode.name}: let {obj} come to rest, then see how it lies"}]
+        misses = []
+        for label, state, guard in outs:
+            try:
+                n, e = _chain(request, graph, edge, mode, arm, f"{tag}.{label}", hub, state, guard, facts, ops, ctg,
+                              seen, where)
+            except PlanningError as exc:
+                misses.append(f"{label}: {exc}")
+                continue
+            nodes, edges = nodes + n, edges + e
+        if len(edges) == 1:
+            raise PlanningError("; ".join(misses))
+    monitor = {"id": f"m.{tag}", "failure_mode": mode.name, "check": check, "margin": mode.margin,
+               "window": mode.window, "recovery": edges[0]["id"], "description": mode.why}
+    return {"edge": edge.id, "monitor": monitor, "nodes": nodes, "edges": edges}
+
+
+def _chain(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: FailureMode, arm: str, tag: str,
+           source: str, start: State, guard: list, facts: dict[str, State], ops: list, ctg: dict[str, float],
+           seen: dict[str, SeenObject], where: Any) -> tuple[list, list]:
+    """Recovery nodes and edges from `source` along the plan from `start` to the merge node; the first edge
+    carries `guard`. A plan of no steps releases the hand straight into the merge node."""
     from kintsugi.reasoning.composer import edge_actions
 
     merge, steps = _merge(start, edge, graph, facts, ops, ctg)
     if not steps:
-        edge_id = f"re.{edge.id}.{mode.name}.{arm}.1"
-        monitor = {"id": f"m.{edge.id}.{mode.name}.{arm}", "failure_mode": mode.name, "check": mode.check(arm, obj),
-                   "margin": mode.margin, "window": mode.window, "recovery": edge_id, "description": mode.why}
-        release = {"id": edge_id, "source": edge.source, "target": merge, "cost": RELEASE_COST,
-                   "actions": [{"name": "open_gripper", "args": {"arm": arm}}],
-                   "description": f"recovery for {mode.name}: {merge} already holds, release"}
-        return {"edge": edge.id, "monitor": monitor, "nodes": [], "edges": [release]}
-    tag = f"{edge.id}.{mode.name}.{arm}"
+        return [], [{"id": f"re.{tag}.1", "source": source, "target": merge, "cost": RELEASE_COST, "guard": guard,
+                     "actions": [{"name": "open_gripper", "args": {"arm": arm}}],
+                     "description": f"recovery for {mode.name}: {merge} already holds, release"}]
     nodes, edges = [], []
-    prev, state = edge.source, start
+    prev, state = source, start
     for i, op in enumerate(steps, 1):
         after = op.apply(state)
         last = i == len(steps)
@@ -182,11 +236,10 @@ def _branch(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: Failure
             nodes.append({"id": target, "description": f"recovering from {mode.name}: {op.label} done",
                           "constraints": constraints, "gripper": gripper})
         edges.append({"id": f"re.{tag}.{i}", "source": prev, "target": target, "actions": edge_actions(op, seen, where),
-                      "cost": op.cost, "description": f"recovery for {mode.name}: {op.label}"})
+                      "cost": op.cost, "guard": guard if i == 1 else [],
+                      "description": f"recovery for {mode.name}: {op.label}"})
         prev, state = target, after
-    monitor = {"id": f"m.{tag}", "failure_mode": mode.name, "check": mode.check(arm, obj), "margin": mode.margin,
-               "window": mode.window, "recovery": edges[0]["id"], "description": mode.why}
-    return {"edge": edge.id, "monitor": monitor, "nodes": nodes, "edges": edges}
+    return nodes, edges
 
 
 def _short(exc: Exception, limit: int = 800) -> str:
@@ -223,10 +276,11 @@ def embedded_arrange(request: ArrangerRequest) -> ArrangerReply:
         for mode in FAILURES:
             if mode.name not in wanted:
                 continue
-            for arm, obj in _candidates(mode, edge, u, facts[edge.target]):
+            v = facts[edge.target]
+            for arm, obj in _candidates(mode, edge, u, v):
                 try:
-                    proposals.append(_branch(request, graph, edge, mode, arm, obj, mode.after(u, arm, obj), facts,
-                                             ops, ctg, seen, where))
+                    proposals.append(_branch(request, graph, edge, mode, arm, obj, u, facts, ops, ctg, seen, where,
+                                             releases=("holding", arm, obj) not in v))
                 except PlanningError as exc:
                     notes.append(f"{edge.id} {mode.name}({arm}, {obj}): no recovery ({exc})")
     covered = sorted({p["monitor"]["failure_mode"] for p in proposals})

@@ -59,6 +59,8 @@ def observed_facts(request: Any, domain: Domain, places: list[str] = ()) -> Stat
             facts.add(("lifted", o.name))
         if "released" in known and o.name not in held:
             facts.add(("released", o.name))
+        if "stands" in known and o.upright:
+            facts.add(("stands", o.name))
         if "narrow" in known and o.extent is not None and sorted(o.extent)[1] < domain.max_grasp_width_m:
             facts.add(("narrow", o.name))
         if "flat" in known and looks_flat(o):
@@ -179,11 +181,22 @@ def instructed_ops(task: str, domain: Any, arms: list[str], objects: list[str], 
         if any(a[0] == "holding" and a[2] in bound and bound[a[2]] != a[1] and ("released", a[2]) in op.pre_pos
                and takers[a[2]] == 1 for a in op.add):  # a two-arm take is not the other arm taking it alone
             continue
+        if _other_hand(op, bound):
+            continue
         targets = {a[2] for a in op.add if len(a) == 3 and a[1] in objects and a[2] in up}
         if targets:
             op = replace(op, pre_pos=op.pre_pos | {("lifted", t) for t in targets})
         out.append(op)
     return out
+
+
+def _other_hand(op: Any, bound: dict[str, str]) -> bool:
+    """A one-arm operator that handles an object lying free (`released` before it) which the instruction gives
+    to the other arm (standing a fallen bottle up is the bottle's arm's job, as taking it is)."""
+    b = dict(op.binding)
+    arm, obj = b.get("?arm"), b.get("?obj")
+    return (arm is not None and obj in bound and bound[obj] != arm and ("released", obj) in op.pre_pos
+            and sum(1 for v in op.spec.params.values() if v == "arm") == 1)
 
 
 def fill(value: Any, binding: dict[str, str], seen: dict[str, SeenObject], where: Any = None) -> Any:

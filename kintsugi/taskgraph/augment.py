@@ -23,9 +23,9 @@ class RecoveryProposal(GraphModel):
     """The nominal edge the failure may occur on; its source node is the failure context."""
     monitor: Monitor
     """`monitor.recovery` names the first recovery edge (leaving the failure context)."""
-    nodes: Annotated[tuple[Node, ...], Field(max_length=8)] = ()
+    nodes: Annotated[tuple[Node, ...], Field(max_length=16)] = ()
     """New recovery nodes; leave empty to merge straight into an existing nominal node."""
-    edges: Annotated[tuple[Edge, ...], Field(max_length=16)] = ()
+    edges: Annotated[tuple[Edge, ...], Field(max_length=24)] = ()
 
 
 def parse_proposals(data: object) -> list[RecoveryProposal]:

@@ -324,11 +324,16 @@ class Touching(_Template):
     arm: Name
     object: Name
     expect: StrictBool = True
+    while_closed: StrictBool = False
+    """Judge only while the gripper is commanded closed: an edge that opens the hand on purpose (a place)
+    is watched for a drop up to its release, and the release itself is no failure."""
 
     def evaluate(self, f: Features) -> float:
         arm = f.arms.get(self.arm)
         if arm is None:
             return NAN
+        if self.while_closed and not arm.closed:
+            return -1.0
         return -1.0 if (self.object in arm.touching) == self.expect else 1.0
 
     def refs(self):

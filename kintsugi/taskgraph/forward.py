@@ -57,6 +57,30 @@ def next_edge(graph: TaskGraph, node_id: str, ctg: dict[str, float] | None = Non
     return best
 
 
+def open_edges(graph: TaskGraph, node_id: str, features: object) -> list[Edge]:
+    """The outgoing edges whose guards hold on `features` (an undecided guard, NaN, does not hold)."""
+    return [e for e in graph.out_edges(node_id) if all(c.evaluate(features) <= 0.0 for c in e.guard)]
+
+
+def guarded_next_edge(graph: TaskGraph, node_id: str, features: object, ctg: dict[str, float] | None = None
+                      ) -> tuple[Edge | None, bool]:
+    """`next_edge` among the edges whose guards hold now; (edge, True) when one does, else the unguarded
+    choice and False (the caller records that no branch matched what it sees)."""
+    ctg = ctg if ctg is not None else cost_to_go(graph)
+    if not any(e.guard for e in graph.out_edges(node_id)):
+        return next_edge(graph, node_id, ctg), True
+    ok = {e.id for e in open_edges(graph, node_id, features)}
+    kind = graph.node(node_id).kind
+    best, best_cost = None, math.inf
+    for e in graph.out_edges(node_id):
+        if e.id not in ok or (kind == "nominal" and e.kind == "recovery"):
+            continue
+        c = e.cost + ctg[e.target]
+        if c < best_cost:
+            best, best_cost = e, c
+    return (best, True) if best is not None else (next_edge(graph, node_id, ctg), False)
+
+
 class Branch(BaseModel):
     """One recovery route's verdict under Eq. 8."""
 

@@ -93,6 +93,10 @@ class Edge(GraphModel):
     target: Id
     actions: Annotated[tuple[ActionCall, ...], Field(min_length=1, max_length=MAX_ITEMS)]
     path_constraints: Annotated[tuple[Constraint, ...], Field(max_length=MAX_ITEMS)] = ()
+    guard: Annotated[tuple[Constraint, ...], Field(max_length=MAX_ITEMS)] = ()
+    """Conditions on the features for taking this edge at all: where a failure can leave more than one
+    outcome (a dropped bottle standing or lying), the recovery node branches and the conductor takes the
+    cheapest edge whose guard holds when it gets there."""
     monitors: Annotated[tuple[Monitor, ...], Field(max_length=16)] = ()
     kind: Kind = "nominal"
     cost: Annotated[float, Field(strict=True, gt=0.0, le=1e9, allow_inf_nan=False)] = 1.0

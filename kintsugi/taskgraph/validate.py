@@ -148,6 +148,8 @@ def check_vocabulary(g: "TaskGraph", vocab: Vocabulary) -> None:
             vocab.check_action(a.name, a.args, f"edge {e.id!r} action {i}")
         for i, c in enumerate(e.path_constraints):
             _check_constraint(c, vocab, f"edge {e.id!r} path constraint {i} ({c.kind})")
+        for i, c in enumerate(e.guard):
+            _check_constraint(c, vocab, f"edge {e.id!r} guard {i} ({c.kind})")
         for m in e.monitors:
             _check_constraint(m.check, vocab, f"edge {e.id!r} monitor {m.id!r} ({m.check.kind})")
 

@@ -28,9 +28,10 @@ from rich.markup import escape
 from kintsugi.config import StrictModel
 from kintsugi.errors import KintsugiError
 from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes
-from kintsugi.methods.agentchord.observe import features
+from kintsugi.methods.agentchord.observe import ARMS, features
+from kintsugi.methods.agentchord.tops import Tops
 from kintsugi.taskgraph.features import Features
-from kintsugi.taskgraph.forward import cost_to_go, next_edge
+from kintsugi.taskgraph.forward import cost_to_go, guarded_next_edge, next_edge
 from kintsugi.taskgraph.model import Edge, TaskGraph
 from kintsugi.taskgraph.monitor import Firing, MonitorBank
 from kintsugi.trial import SkillLog, TrialLog
@@ -51,9 +52,9 @@ class ConductorError(KintsugiError):
 
 
 class ConductorConfig(StrictModel):
-    max_actions: int = 80
+    max_actions: int = 200
     """Atomic actions per episode before the conductor gives up (a recovery loop never ends a trial hanging)."""
-    max_recoveries: int = 6
+    max_recoveries: int = 10
     """Recoveries (or backtracks) per episode before the conductor gives up."""
     on_failure: Literal["branch", "backtrack"] = "branch"
     """branch: the pre-compiled forward recovery (AgentChord); backtrack: back to the latest nominal node whose
@@ -79,6 +80,10 @@ def proprioceptive(check: Any) -> bool:
     return all(role == "arm" or feature is None for _, role, feature in check.refs())
 
 
+def _guard_objects(graph: TaskGraph, node: str) -> set[str]:
+    return {e for x in graph.out_edges(node) for c in x.guard for e, role, _ in c.refs() if role != "arm"}
+
+
 def _objects_of(edge: Edge) -> set[str]:
     names: set[str] = set()
     for m in edge.monitors:
@@ -91,7 +96,8 @@ def _objects_of(edge: Edge) -> set[str]:
 class Conductor:
     def __init__(self, graph: TaskGraph, robot: Any, keyframes: TabletopKeyframes, log: TrialLog,
                  steps_per_tick: int, compiled_keyframes: dict[str, np.ndarray] | None = None,
-                 config: ConductorConfig = ConductorConfig(), metrics: Metrics | None = None) -> None:
+                 config: ConductorConfig = ConductorConfig(), metrics: Metrics | None = None,
+                 tops: Tops | None = None) -> None:
         self.graph = graph
         self.robot = robot
         self.keyframes = keyframes
@@ -103,7 +109,8 @@ class Conductor:
         self.after_action: Callable[[Edge, int], bool] | None = None
         """Optional check after each atomic action (edge, index) -> failed? (the re-planning baselines' verifier)."""
         self.ctg = cost_to_go(graph)
-
+        self.tops = tops if tops is not None else Tops()
+        """Which end of each object is its top (for standing a fallen object up the right way round)."""
         self.arms = {a.args.get("arm") for e in graph.edges for a in e.actions if isinstance(a.args.get("arm"), str)}
 
     # --- running ------------------------------------------------------------------
@@ -136,12 +143,16 @@ class Conductor:
                                    f"{self.config.max_recoveries} recoveries")
                     return False
                 node = self._run_recovery(edge, firing)
+                if node is None:  # the recovery was itself disturbed (a drop, a missed grasp): run it again
+                    continue
                 # Read the failed edge's monitors again only where they still apply (a merge past its target,
                 # e.g. a release straight to the goal, leaves the hand empty on purpose).
                 firing = self._recheck(edge) if node == edge.target else None
         return self.goal_holds()
 
-    def run_edge(self, edge: Edge, with_monitors: bool) -> Firing | None:
+    def run_edge(self, edge: Edge, with_monitors: bool, stop: Callable[[Any], bool] | None = None) -> Firing | None:
+        """Run the edge's actions under its monitors; the first firing, or None. `stop(action)`, asked after
+        each action, ends the edge early (an outside watch fired)."""
         self.log.status(f"{edge.kind} {edge.id}")
         objs = _objects_of(edge)
         monitors = list(edge.monitors) if with_monitors else []
@@ -158,6 +169,8 @@ class Conductor:
         try:
             for i, action in enumerate(edge.actions):
                 self._execute(edge, action.name, dict(action.args))
+                if stop is not None and stop(action):
+                    return None
                 if fired:
                     firing, self.metrics.fired_at = fired[0]
                     self._fired(edge, firing)
@@ -239,19 +252,51 @@ class Conductor:
         if branch and firing.recovery is not None:
             self.log.transition(edge.id, firing.recovery)
 
-    def _run_recovery(self, failed: Edge, firing: Firing) -> str:
-        """The recovery chain from the failure context to its merge node; returns the merge node."""
+    def _run_recovery(self, failed: Edge, firing: Firing) -> str | None:
+        """The recovery chain from the failure context to its merge node; returns the merge node, or None when
+        the recovery itself was disturbed (a held object dropped, a grasp closed on nothing): the caller runs
+        the same recovery again, since the failure context and its predicted state are the same."""
         g = self.graph
         edge = g.edge(firing.recovery)
         self._settle(failed, edge)
         while True:
-            self.run_edge(edge, with_monitors=False)
+            again = self._run_watched(edge)
+            if again is not None:
+                self.log.event(self.robot.sim_time, "recovery disturbed", f"{edge.id}: {again}; run it again")
+                self._settle(failed, edge)
+                return None
             if g.node(edge.target).kind == "nominal":
                 return edge.target
-            nxt = next_edge(g, edge.target, self.ctg)
+            nxt, matched = guarded_next_edge(g, edge.target, features(self.robot, _guard_objects(g, edge.target)),
+                                             self.ctg)
             if nxt is None:  # cannot happen on an Eq. 8-filtered graph: every recovery node merges
                 raise ConductorError(f"recovery node {edge.target!r} has no way back into the graph")
+            if not matched:
+                self.log.event(self.robot.sim_time, "branch", f"no guard out of {edge.target!r} holds; "
+                               f"taking the cheapest, {nxt.id!r}")
             edge = nxt
+
+    def _run_watched(self, edge: Edge) -> str | None:
+        """One recovery edge under `LossWatch`, then its target's constraints; what went wrong, or None."""
+        from kintsugi.methods.agentchord.recovery_watch import LossWatch, unmet, watched
+
+        watch, observers = LossWatch(self.robot), getattr(self.robot, "step_observers", None)
+        if observers is not None:
+            observers.append(watch)
+        try:
+            self.run_edge(edge, with_monitors=False, stop=lambda a: watch.check_grasp(a) is not None)
+        finally:
+            if observers is not None:
+                observers.remove(watch)
+        if watch.lost is not None:
+            self.metrics.fired_at = watch.at
+            return watch.lost
+        node = self.graph.node(edge.target)
+        bad = unmet(node, features(self.robot, watched(node))) if node.constraints else None
+        if bad is not None:
+            self.metrics.fired_at = self.robot_steps()
+            return f"{edge.target!r}: {bad} violated"
+        return None
 
     def _settle(self, failed: Edge, recovery: Edge) -> None:
         """Open the failing arm's gripper and keep it open until the objects its monitors watch have come to
@@ -269,6 +314,7 @@ class Conductor:
         for _ in range(SETTLE_TRIES):
             self._execute(edge, "open_gripper", {"arm": arm})
             now = self.robot.features(objs)
+            self.tops.observe(now)
             seen = [now[k] for k in sorted(objs) if now[k].centroid is not None]
             pts = np.array([f.centroid for f in seen])
             axes = [None if f.axis is None else np.asarray(f.axis, dtype=float) for f in seen]
@@ -292,10 +338,13 @@ class Conductor:
         call = {"action": name, **args}
         if name == "move_to_obj" and len(edge.actions) == 1:
             call = self._keyframe_call(edge, call)
+        if name == "rotate_eef" and call.get("axis") == "closing" and self._wants_upright(edge):
+            call = self._upright_call(call)
         if self.metrics.fired_at is not None:  # the first command after a firing: detection -> recovery
             self.metrics.recovery_latency_steps.append(self.robot_steps() - self.metrics.fired_at)
             self.metrics.fired_at = None
         result = self.robot.execute(call)
+        self.tops.follow({a: self.robot.arm_state(a) for a in ARMS})
         self.metrics.actions += 1
         self.metrics.episode_steps += result.steps // self.steps_per_tick
         arm = result.arms[0] if result.arms else "right"
@@ -311,6 +360,22 @@ class Conductor:
                      f"[/bold] -> {flag} ({escape(result.message)})", markup=True)
         if result.ik_failed:
             raise KeyframeError(f"{edge.id} {name}: {result.message}")
+
+    def _wants_upright(self, edge: Edge) -> bool:
+        return any(c.kind == "upright" for c in self.graph.node(edge.target).constraints)
+
+    def _upright_call(self, call: dict) -> dict:
+        """Edge synthesis (Eq. 10) of a turn toward an upright sub-goal: the hand orientation that puts the held
+        object's known top up, level and facing away from the shoulder; as given when nothing held has a top."""
+        arm = call["arm"]
+        turn = self.tops.upright_turn(arm, self.robot.arm_state(arm), self.keyframes.shoulders[arm])
+        if turn is None:
+            return call
+        from scipy.spatial.transform import Rotation
+
+        rpy = Rotation.from_matrix(turn).as_euler("xyz", degrees=True)
+        return {"action": "move_by_offset", "arm": arm, "dxyz": (0.0, 0.0, 0.0), "frame": "world",
+                "drpy_deg": tuple(round(float(v), 3) for v in rpy)}
 
     def _keyframe_call(self, edge: Edge, call: dict) -> dict:
         arm = call["arm"]

@@ -39,6 +39,8 @@ RIM_INSET_M = 0.003
 """Two-arm carry: each arm takes a side rim this far forward of the centre, this high, this far inside the
 perceived side (half a wall)."""
 CARRY_LIFT_M = 0.03
+UPEND_LIFT_M = 0.15
+"""Standing a fallen object up: lift it this high before turning it (its lower half swings down)."""
 REGION_TOL_M = 0.04
 """A sub-goal `in_region` holds when the perceived centroid is this close (x and y) to the region's centre."""
 
@@ -67,6 +69,8 @@ PREDICATES = [
     _p("poured", ["object", "object"], "the first object was tilted to pour over the second (history)"),
     _p("released", ["object"], "no arm holds the object"),
     _p("flat", ["object"], "the object lies flat (it is no taller than it is wide), on the table or level in the hand"),
+    _p("stands", ["object"], "the object has a base it stands on: it was seen standing with a clear axis (a bottle, "
+       "a cup; not a cube or a fork), so it can fall over and be stood back up (static)"),
     _p("narrow", ["object"], "the object fits between one gripper's open fingers (static, from its perceived size)"),
     _p("region", ["place"], "the place is a region of the table (static)"),
     _p("direction", ["place"], "the place is a direction a heading goal may name (static)"),
@@ -134,6 +138,17 @@ OPERATORS = [
         ["holding(?arm, ?obj)"], ["hand_empty(?arm)", "released(?obj)"],
         [{"name": "grasp", "args": {"arm": A, "obj": O, "pre_grasp_offset": 0.06}}], 260,
         "open, come down over an object lying flat, close on it"),
+    _op("stand_up", {A: "arm", O: "object"},
+        ["hand_empty(?arm)", "narrow(?obj)", "stands(?obj)", "not upright(?obj)", "on_table(?obj)",
+         "released(?obj)"],
+        ["upright(?obj)"], [],
+        [{"name": "grasp", "args": {"arm": A, "obj": O, "pre_grasp_offset": 0.06}},
+         {"name": "move_by_offset", "args": {"arm": A, "dxyz": [0.0, 0.0, UPEND_LIFT_M]}},
+         {"name": "rotate_eef", "args": {"arm": A, "angle_deg": 90.0, "axis": "closing"}},
+         {"name": "place", "args": {"arm": A, "x": "$x(?obj)", "y": "$y(?obj)"}}], 720,
+        "stand a fallen object back up: grasp it lying (top-down, across its axis), lift it, turn the hand a "
+        "quarter turn about the closing axis (the way that brings the object's top up), set it down upright "
+        "where it was first seen and release it"),
     _op("carry_to", {A: "arm", O: "object", P: "place"},
         ["holding(?arm, ?obj)", "lifted(?obj)", "region(?place)", "not over_place(?obj, ?place)"],
         ["over_place(?obj, ?place)"], ["over_place(?obj, _)", "over(?obj, _)"],

@@ -83,6 +83,7 @@ class AgentChord:
                       f"{len(g.monitors())} monitors, {len(compiled.result.kept)} recovery branches kept "
                       f"({len(compiled.result.rejected)} dropped by Eq. 8)")
             conductor = Conductor(g, robot, keyframes, log, steps_per_tick, compiled_kf, self.config)
+            conductor.tops.observe(first.objects)
             try:
                 ok = conductor.run()
             finally:

@@ -1,0 +1,82 @@
+"""Which end of each object is its top, kept by the conductor from what the robot senses.
+
+Perception gives an object's principal axis without a sign, and a bottle looks the same from both ends, so
+after it falls over nothing in one image says which end is its mouth. The robot can still know: an object
+first seen standing has its top up; while a hand holds it, its top turns with the hand (joint encoders);
+when it leaves the hand, its top is where the hand last had it; and while it falls and rolls, each perceived
+axis is signed to agree with the previous estimate (the settle reads come every ~0.1 s, well under the time
+a falling object needs to turn by 90 degrees). Standing a fallen object up uses this to turn its top up,
+not down. No simulator state is read: arm poses, finger-pad touch and perceived axes only.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Mapping
+
+import numpy as np
+from scipy.spatial.transform import Rotation
+
+UP = np.array([0.0, 0.0, 1.0])
+
+
+def hand_rotation(arm_state: Any) -> np.ndarray:
+    """The gripper frame from the arm's own encoders (extrinsic x-y-z degrees)."""
+    return Rotation.from_euler("xyz", arm_state.tcp_rpy_deg, degrees=True).as_matrix()
+
+
+def held_by(arm_state: Any) -> set[str]:
+    return {k for k, n in arm_state.touching.items() if n == 2}
+
+
+class Tops:
+    """Signed axis (pointing to the object's top) per object in the world, and in the hand while held."""
+
+    def __init__(self) -> None:
+        self.world: dict[str, np.ndarray] = {}
+        self.in_hand: dict[tuple[str, str], np.ndarray] = {}
+
+    def observe(self, objects: Mapping[str, Any]) -> None:
+        """Sign each perceived axis like the current estimate; an object first seen standing has its top up."""
+        for name, f in objects.items():
+            if not getattr(f, "visible", False) or f.axis is None or f.upright is None:
+                continue
+            a = np.asarray(f.axis, dtype=float)
+            a = a / max(float(np.linalg.norm(a)), 1e-12)
+            ref = self.world.get(name)
+            if ref is None:
+                if f.upright:
+                    self.world[name] = UP.copy()
+                continue
+            self.world[name] = a if float(a @ ref) >= 0.0 else -a
+
+    def follow(self, arms: Mapping[str, Any]) -> None:
+        """After an action: objects a hand holds turn with it; one that left a hand keeps the hand's last turn."""
+        for arm, state in arms.items():
+            rot, held = hand_rotation(state), held_by(state)
+            for obj in held:
+                key = (arm, obj)
+                if key in self.in_hand:
+                    self.world[obj] = rot @ self.in_hand[key]
+                elif obj in self.world:
+                    self.in_hand[key] = rot.T @ self.world[obj]
+            for key in [k for k in self.in_hand if k[0] == arm and k[1] not in held]:
+                self.world[key[1]] = rot @ self.in_hand.pop(key)
+
+    def upright_turn(self, arm: str, arm_state: Any, shoulder: Any) -> np.ndarray | None:
+        """The world-frame turn of the hand that stands the object it holds up: its known top up, the hand level
+        and facing away from the shoulder (an ordinary side grasp, which the arm reaches). None when the hand
+        holds nothing with a known top."""
+        rot, held = hand_rotation(arm_state), held_by(arm_state)
+        tops = [t for (a, o), t in self.in_hand.items() if a == arm and o in held]
+        if not tops:
+            return None
+        approach = np.array([0.0, 0.0, 1.0])
+        top = tops[0] - float(tops[0] @ approach) * approach
+        if np.linalg.norm(top) < 1e-6:
+            return None
+        top /= np.linalg.norm(top)
+        out = np.asarray(arm_state.tcp_pos, dtype=float)[:2] - np.asarray(shoulder, dtype=float)[:2]
+        out = np.array([*(out / max(float(np.linalg.norm(out)), 1e-9)), 0.0])
+        world = np.column_stack([UP, out, np.cross(UP, out)])
+        hand = np.column_stack([top, approach, np.cross(top, approach)])
+        return world @ hand.T @ rot.T
