@@ -47,6 +47,10 @@ SETTLE_READS = 2
 SETTLE_TRIES = 25
 
 
+UPRIGHT_SWINGS_DEG = (0.0, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0)
+"""Standing a held object up: the hand faces away from the shoulder, or swung this far about the vertical."""
+
+
 class ConductorError(KintsugiError):
     """The conductor cannot go on (action budget spent, a recovery node with no way back)."""
 
@@ -316,7 +320,7 @@ class Conductor:
             now = self.robot.features(objs)
             self.tops.observe(now)
             seen = [now[k] for k in sorted(objs) if now[k].centroid is not None]
-            pts = np.array([f.centroid for f in seen])
+            pts = np.array([f.centroid for f in seen], dtype=float).reshape(-1, 3)  # none seen: (0, 3)
             axes = [None if f.axis is None else np.asarray(f.axis, dtype=float) for f in seen]
             moved = prev is None or pts.shape != prev[0].shape or not np.all(np.linalg.norm(pts - prev[0], axis=1) < SETTLE_M)
             if not moved:
@@ -367,12 +371,20 @@ class Conductor:
     def _upright_call(self, call: dict) -> dict:
         """Edge synthesis (Eq. 10) of a turn toward an upright sub-goal: the hand orientation that puts the held
         object's known top up, level and facing away from the shoulder; as given when nothing held has a top."""
-        arm = call["arm"]
-        turn = self.tops.upright_turn(arm, self.robot.arm_state(arm), self.keyframes.shoulders[arm])
-        if turn is None:
-            return call
         from scipy.spatial.transform import Rotation
 
+        from kintsugi.methods.agentchord.tops import hand_rotation
+
+        arm = call["arm"]
+        state = self.robot.arm_state(arm)
+        ik, pos, rot = self.keyframes.iks[arm], np.array(state.tcp_pos), hand_rotation(state)
+        turn = None
+        for swing in UPRIGHT_SWINGS_DEG:  # the first facing the arm reaches (its IK, checked before moving)
+            turn = self.tops.upright_turn(arm, state, self.keyframes.shoulders[arm], swing)
+            if turn is None:
+                return call
+            if ik.solve(pos, turn @ rot, np.radians(state.joints_deg)).ok:
+                break
         rpy = Rotation.from_matrix(turn).as_euler("xyz", degrees=True)
         return {"action": "move_by_offset", "arm": arm, "dxyz": (0.0, 0.0, 0.0), "frame": "world",
                 "drpy_deg": tuple(round(float(v), 3) for v in rpy)}

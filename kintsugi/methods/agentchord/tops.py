@@ -62,10 +62,10 @@ class Tops:
             for key in [k for k in self.in_hand if k[0] == arm and k[1] not in held]:
                 self.world[key[1]] = rot @ self.in_hand.pop(key)
 
-    def upright_turn(self, arm: str, arm_state: Any, shoulder: Any) -> np.ndarray | None:
+    def upright_turn(self, arm: str, arm_state: Any, shoulder: Any, swing_deg: float = 0.0) -> np.ndarray | None:
         """The world-frame turn of the hand that stands the object it holds up: its known top up, the hand level
-        and facing away from the shoulder (an ordinary side grasp, which the arm reaches). None when the hand
-        holds nothing with a known top."""
+        and facing away from the shoulder (an ordinary side grasp, which the arm reaches), swung `swing_deg`
+        about the vertical from there. None when the hand holds nothing with a known top."""
         rot, held = hand_rotation(arm_state), held_by(arm_state)
         tops = [t for (a, o), t in self.in_hand.items() if a == arm and o in held]
         if not tops:
@@ -76,7 +76,8 @@ class Tops:
             return None
         top /= np.linalg.norm(top)
         out = np.asarray(arm_state.tcp_pos, dtype=float)[:2] - np.asarray(shoulder, dtype=float)[:2]
-        out = np.array([*(out / max(float(np.linalg.norm(out)), 1e-9)), 0.0])
+        yaw = np.arctan2(out[1], out[0]) + np.radians(swing_deg)
+        out = np.array([np.cos(yaw), np.sin(yaw), 0.0])
         world = np.column_stack([UP, out, np.cross(UP, out)])
         hand = np.column_stack([top, approach, np.cross(top, approach)])
         return world @ hand.T @ rot.T
