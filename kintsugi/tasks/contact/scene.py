@@ -105,8 +105,8 @@ def build_mjcf(cfg: ContactConfig, geometry: dict[str, Geometry], physics: dict[
     marks = "\n    ".join(f'<geom name="{n}" type="cylinder" size="{_f(m.radius, 0.0005)}" pos="{_f(m.x, m.y, 0.0005)}" '
                           f'rgba="{_f(*m.rgba)}" contype="0" conaffinity="0"/>' for n, m in markers.items())
     sensors = "\n    ".join(
-        f'<framepos name="{n}_pos" objtype="body" objname="{n}"/><framequat name="{n}_quat" objtype="body" objname="{n}"/>'
-        f'<framelinvel name="{n}_vel" objtype="body" objname="{n}"/>' for n in geometry)
+        f'<framepos name="{n}_pos" objtype="xbody" objname="{n}"/><framequat name="{n}_quat" objtype="xbody" objname="{n}"/>'
+        f'<framelinvel name="{n}_vel" objtype="xbody" objname="{n}"/>' for n in geometry)
     effector, actuators = _effector(cfg)
     fwd = [c - p for c, p in zip(cam.look_at_m, cam.pos_m)]
     right = _unit((fwd[1], -fwd[0], 0.0))
