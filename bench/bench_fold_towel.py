@@ -8,6 +8,13 @@
 (b) `fold-towel` with the `scripted` method through `run_trial` (condition `pose`): wall time per
     episode, physics steps, steps/s within the episode (perception and IK included), success.
 Success rates with a Wilson CI come from `kintsugi bench fold-towel` (see the final report).
+(d) `--grasp`: how the pinch takes a bottom corner when the corners the script is given are off by a
+    few millimetres (ground truth plus a known offset, along and across the corner's diagonal): after
+    a 6 cm lift the corner either hangs at the fingertips (about -25 mm below the tool centre point)
+    or has popped up into the pinch (about 0 mm). Both modes occur within 0.3 mm of offset at the
+    script's own inset and tip clearance, which is why perceived corners (0-3 mm off) fold so rarely.
+
+    .venv/bin/python bench/bench_fold_towel.py --grasp [--inset 0.012 --tip 0.0005]
 """
 
 from __future__ import annotations
@@ -54,12 +61,70 @@ def features_ms_per_view(repeats: int = 20) -> float:
     return 1000 * statistics.median(times) / len(CAMERAS)
 
 
+GRASP_OFFSETS_MM = ((0, 0), (-3, 0), (3, 0), (0, -3), (0, 3), (-1, -1), (1, 1), (0.3, 0), (-0.3, 0))
+"""(along the inward diagonal, across it) offsets of the bottom corners handed to the script."""
+
+
+def grasp_modes(seed: int, inset: float, tip: float) -> list[tuple[float, float, str, float]]:
+    """Per offset and arm: the held corner's height below the tool centre point after a 6 cm lift."""
+    import numpy as np
+
+    from kintsugi.tasks.tabletop import fold_towel as ft
+    from kintsugi.tasks.tabletop.cloth import TOWEL, corner_indices
+    from kintsugi.tasks.tabletop.robot import TabletopRobot
+    from kintsugi.tasks.tabletop.task import expand
+
+    ft.INSET_M, ft.TIP_CLEARANCE_M = inset, tip
+    task = TASKS.get("fold-towel").factory()
+    out = []
+    for a, b in GRASP_OFFSETS_MM:
+        world, *_ = task.build(task.config({"perception.objects": "truth"}), "pose", seed)
+        robot = TabletopRobot(world)
+        idx = corner_indices(world.cfg.towel.count)
+        v = world.flex_vertices(0)
+        obs = robot.observation(images=False)
+        ex = dict(obs.objects[TOWEL].extremes)
+        for arm, (bottom, _) in ft.ARM_CORNERS.items():
+            opposite = {"bottom_left": "top_right", "bottom_right": "top_left"}[bottom]
+            d = v[idx[opposite]][:2] - v[idx[bottom]][:2]
+            d /= np.linalg.norm(d)
+            n = np.array([-d[1], d[0]]) * (1 if arm == "left" else -1)  # mirrored: the same side of each corner
+            c = v[idx[bottom]].copy()
+            c[:2] += (a * d + b * n) / 1000
+            ex[f"corner_{bottom}"] = tuple(float(x) for x in c)
+        obs.objects[TOWEL] = obs.objects[TOWEL].model_copy(update={"extremes": ex})
+        for entry in task.spec.script(obs)[:3]:  # above the corners, down, close
+            for action in expand(entry, robot):
+                robot.execute(action)
+        robot.execute({"action": "drive", **{arm: {"action": "move_by_offset", "arm": arm, "dxyz": (0.0, 0.0, 0.06)}
+                                             for arm in ft.ARM_CORNERS}})
+        v = world.flex_vertices(0)
+        for arm, (bottom, _) in ft.ARM_CORNERS.items():
+            out.append((a, b, arm, 1000 * float(v[idx[bottom]][2] - robot.arm_state(arm).tcp_pos[2])))
+        world.close()
+    return out
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--trials", type=int, default=3)
     ap.add_argument("--steps", type=int, default=1500)
+    ap.add_argument("--grasp", action="store_true", help="only (d): grasp mode against corner offsets")
+    ap.add_argument("--inset", type=float, default=None, help="(d) grasp inset, m (default: the script's)")
+    ap.add_argument("--tip", type=float, default=None, help="(d) fingertip clearance, m (default: the script's)")
     args = ap.parse_args()
     load_all()
+    if args.grasp:
+        from kintsugi.tasks.tabletop import fold_towel as ft
+
+        inset, tip = args.inset or ft.INSET_M, args.tip or ft.TIP_CLEARANCE_M
+        for seed in (1, 2):
+            rows = grasp_modes(seed, inset, tip)
+            for a, b, arm, dz in rows:
+                mode = "hangs" if dz < -15 else "popped" if dz > -8 else "between"
+                print(f"seed {seed} inset {inset * 1000:.1f} mm tip {tip * 1000:.1f} mm offset ({a:+.1f}, {b:+.1f}) mm "
+                      f"{arm:5s}: corner {dz:+6.1f} mm from the tcp ({mode})")
+        return
     load = os.getloadavg()
     print(f"machine: {platform.system()} {platform.machine()}, {os.cpu_count()} CPUs, "
           f"load average {load[0]:.1f} (other work shares the cores: figures are lower bounds)")
