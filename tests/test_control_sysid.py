@@ -80,3 +80,20 @@ def test_bad_problems_are_refused_with_names() -> None:
         fit(SysIdProblem(model, SPECS, SIGNALS, [log]))
     with pytest.raises(ValueError, match="0 < low < high"):
         ParamSpec(kind="mass", name="box", bounds=(1.0, 0.5))
+
+
+def test_window_cap_counts_each_log_in_full_up_to_the_cap_then_one_percent_of_the_excess() -> None:
+    from kintsugi.control.sysid import _Replay
+
+    model = _prior_model()
+    logs = [_log(0), _log(1)]
+    settings = [np.array([4.0, 0.9]), np.array([0.5, 0.5]), np.array([0.6, 0.45])]
+    plain = _Replay(SysIdProblem(model, SPECS, SIGNALS, logs[:1], SysIdConfig(nthread=1)))
+    capped = _Replay(SysIdProblem(model, SPECS, SIGNALS, logs[:1], SysIdConfig(nthread=1, window_cap=1.0)))
+    raw = plain.losses([plain.variant(x) for x in settings])
+    got = capped.losses([capped.variant(x) for x in settings])
+    np.testing.assert_allclose(got, np.minimum(raw, 1.0) + 0.01 * np.maximum(raw - 1.0, 0.0), rtol=1e-12)
+    assert raw[0] > 1.0 and got[0] < raw[0] and raw[1] < 1e-6 and got[1] == pytest.approx(raw[1])
+    assert np.argsort(got).tolist() == np.argsort(raw).tolist()  # far-off settings stay ranked
+    plain.engine.close()
+    capped.engine.close()

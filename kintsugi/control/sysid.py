@@ -84,6 +84,14 @@ class SysIdConfig(StrictModel):
     max_cycles: int = Field(4, ge=1)
     converge_tol: float = Field(0.05, gt=0)  # stop when no parameter moved more than this (relative)
     nthread: int | None = Field(None, ge=1)
+    window_cap: float | None = Field(None, gt=0)
+    """Nearly truncated least squares: each log's loss counts in full up to this, and beyond it only
+    `beyond_cap` of the excess (None: plain least squares). A contact-rich replay can diverge from its
+    log whatever the parameters (a hand dragging on the table flips between stick and slip on a 1 %
+    change); such a log says little beyond 'it diverged', and under a plain squared loss its chaotic
+    few units would outweigh every log that does inform. The small slope keeps far-off settings ranked.
+    Set it in the units of the signals' scales: about the loss of a log replayed with the right parameters."""
+    beyond_cap: float = Field(0.01, ge=0, le=1)
     substeps: int = Field(1, ge=1)
     """Physics steps per logged control step in replays: a log at a coarse control rate can be replayed
     with a finer integration (each command held for `substeps` steps, sensors read at the log's rate)."""
@@ -205,7 +213,8 @@ class _Replay:
         return m
 
     def losses(self, models: list[mujoco.MjModel]) -> np.ndarray:
-        """Mean over logs of the weighted, scaled squared sensor residuals; inf if a replay diverged."""
+        """Mean over logs of the weighted, scaled squared sensor residuals (each log's capped at
+        `window_cap`); inf if a replay diverged numerically."""
         G = len(models)
         total = np.zeros(G)
         for logs in self.groups.values():
@@ -222,6 +231,9 @@ class _Replay:
                 resid = (_binned(seen, s.bin) - _binned(obs[None], s.bin)) / s.scale
                 with np.errstate(invalid="ignore"):
                     part += s.weight * np.nanmean(resid**2, axis=(2, 3)).reshape(G * L)
+            if self.problem.cfg.window_cap is not None:
+                cap = self.problem.cfg.window_cap
+                part = np.minimum(part, cap) + self.problem.cfg.beyond_cap * np.maximum(part - cap, 0.0)
             part[~batch.valid] = np.inf
             total += part.reshape(G, L).sum(axis=1)
         total /= len(self.problem.logs)
