@@ -98,10 +98,37 @@ def test_coffee_goal_puts_the_capsule_in_first_and_carries_the_wide_tray_with_bo
     reply = _compose("Put the capsule into the tray with the left arm, then carry the tray with both arms.", goal,
                      [capsule, tray], {"tray_forward": (0.56, 0.0)})
     assert _ops(reply) == ["grasp(left, capsule)", "lift(left, capsule)", "put_inside(left, capsule, tray)",
-                           "carry_both(tray, tray_forward)"]
-    carry = reply.graph["edges"][-1]["actions"]
-    assert all(a["name"] == "drive" for a in carry)
-    move = carry[2]["args"]
+                           "take_both(tray)", "carry_both(tray, tray_forward)", "let_go_both(tray)"]
+    edges = reply.graph["edges"]
+    assert all(a["name"] == "drive" for e in edges[-3:] for a in e["actions"])
+    move = edges[-2]["actions"][1]["args"]
     assert move["left"]["dxyz"][:2] == pytest.approx([0.16, 0.0]) == move["right"]["dxyz"][:2]
+    carry = edges[-3]["actions"]
     rims = carry[0]["args"]
     assert rims["left"]["grasp_offset"][1] == pytest.approx(0.077) and rims["right"]["grasp_offset"][1] == pytest.approx(-0.077)
+
+
+def test_two_arm_carry_is_watched_for_a_drop_and_recovers_by_taking_it_again_with_both() -> None:
+    capsule = _box("capsule", (0.35, 0.25), (0.03, 0.03, 0.05), upright=True)
+    tray = _box("tray", (0.40, 0.0), (0.22, 0.16, 0.04), upright=None)
+    goal = ["inside(capsule, tray)", "upright(capsule)", "in_region(tray, tray_forward)", "flat(tray)",
+            "released(capsule)", "released(tray)"]
+    regions = {"tray_forward": (0.56, 0.0)}
+    reply = _compose("Put the capsule into the tray with the left arm, then carry the tray with both arms.", goal,
+                     [capsule, tray], regions)
+    req = ArrangerRequest(task="coffee", graph=reply.graph, node_facts=reply.node_facts,
+                          edge_operators=reply.edge_operators, objects=[capsule, tray], arms=ARMS,
+                          domain=TABLETOP_DOMAIN, regions=regions)
+    props = embedded_arrange(req).proposals
+    drops = [p for p in props if p["edge"] == "e5_carry_both" and p["monitor"]["failure_mode"] == "drop"]
+    assert sorted(p["monitor"]["check"]["arm"] for p in drops) == ["left", "right"]
+    assert not any(p["edge"] == "e6_let_go_both" for p in props)  # it opens on purpose
+    assert not any(p["monitor"]["failure_mode"] in ("slip", "missed_grasp") and p["edge"] in ("e4_take_both",
+                                                                                             "e5_carry_both")
+                   for p in props)  # held by thin rims, far from the centroid
+    first = drops[0]["edges"][0]
+    assert first["actions"][0]["name"] == "drive" and first["actions"][0]["args"]["left"]["action"] == "grasp"
+    assert drops[0]["edges"][-1]["target"] == "s5_carry_both"
+    # The two-arm hold node checks the pads, not the centroid's distance from each hand.
+    taken = next(n for p in drops for n in p["nodes"])
+    assert {c["kind"] for c in taken["constraints"]} == {"touching"}

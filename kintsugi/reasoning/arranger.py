@@ -130,8 +130,20 @@ def _facts(texts: list[str], request: ArrangerRequest) -> State:
     return pos
 
 
+def _arm_calls(edge: Any) -> list[tuple[str, dict]]:
+    """(action name, arguments) of the edge's per-arm calls: a dual `drive` counts as its two arm actions (a
+    two-arm grasp can miss like a one-arm one)."""
+    out = []
+    for a in edge.actions:
+        out.append((a.name, a.args))
+        if a.name == "drive":
+            out += [(v["action"], v) for v in a.args.values() if isinstance(v, dict) and isinstance(v.get("action"), str)]
+    return out
+
+
 def _candidates(mode: FailureMode, edge: Any, u: State, v: State | None = None) -> list[tuple[str, str]]:
-    kinds = {a.name for a in edge.actions}
+    calls = _arm_calls(edge)
+    kinds = {name for name, _ in calls}
     if not kinds & mode.actions:
         return []
     if mode.needs == "held":  # an edge that lets go on purpose (a handover's giver) is not watched for a drop
@@ -140,11 +152,15 @@ def _candidates(mode: FailureMode, edge: Any, u: State, v: State | None = None) 
             held = [(arm, o) for arm, o in held if sum(1 for _, p in held if p == o) == 1]
         return sorted(held)
     out = []
-    for a in edge.actions:
-        if a.name in mode.actions and isinstance(a.args.get("arm"), str) and isinstance(a.args.get("obj"), str):
-            if mode.name == "toppled" and ("upright", a.args["obj"]) not in u:
+    for name, args in calls:
+        if name in mode.actions and isinstance(args.get("arm"), str) and isinstance(args.get("obj"), str):
+            if mode.name == "toppled" and ("upright", args["obj"]) not in u:
                 continue  # only what stands can topple (a lying fork's axis is horizontal by design)
-            out.append((a.args["arm"], a.args["obj"]))
+            if mode.name == "missed_grasp" and ("narrow", args["obj"]) not in u:
+                continue  # a wide object is taken by a thin rim: a closed hand is no sign of a miss (the pads,
+                # watched as a drop on the next edge, are)
+            if (args["arm"], args["obj"]) not in out:
+                out.append((args["arm"], args["obj"]))
     return out
 
 

@@ -277,13 +277,25 @@ def node_constraints(domain: Domain, atoms: list[Atom], seen: dict[str, SeenObje
     specs = {p.name: p for p in domain.predicates}
     constraints: list = []
     gripper: dict[str, str] = {}
+    shared = _held_by_two(atoms)
     for a in atoms:
         spec = specs[a[0]]
         b = _positional({}, a[1:])
-        constraints += [fill(c, b, seen, where) for c in spec.constraints]
+        cs = [c for c in spec.constraints if not (a[0] == "holding" and a[2] in shared and c.get("kind") == "detached")]
+        constraints += [fill(c, b, seen, where) for c in cs]
         if spec.gripper is not None and spec.params and spec.params[0] == "arm":
             gripper[a[1]] = spec.gripper
     return constraints, gripper
+
+
+def _held_by_two(atoms: list[Atom]) -> set[str]:
+    """Objects two arms hold at once: taken by their rims, far from the centroid by design, so the centroid's
+    distance from either hand (`detached`) says nothing about the grasp; the pads (`touching`) still do."""
+    count: dict[str, int] = {}
+    for a in atoms:
+        if a[0] == "holding" and len(a) == 3:
+            count[a[2]] = count.get(a[2], 0) + 1
+    return {o for o, n in count.items() if n > 1}
 
 
 def edge_actions(op: GroundOp, seen: dict[str, SeenObject], where: Any = None) -> list:

@@ -344,6 +344,8 @@ class Conductor:
             call = self._keyframe_call(edge, call)
         if name == "rotate_eef" and call.get("axis") == "closing" and self._wants_upright(edge):
             call = self._upright_call(call)
+        if name == "drive":
+            call = self._carry_call(edge, call)
         if self.metrics.fired_at is not None:  # the first command after a firing: detection -> recovery
             self.metrics.recovery_latency_steps.append(self.robot_steps() - self.metrics.fired_at)
             self.metrics.fired_at = None
@@ -388,6 +390,42 @@ class Conductor:
         rpy = Rotation.from_matrix(turn).as_euler("xyz", degrees=True)
         return {"action": "move_by_offset", "arm": arm, "dxyz": (0.0, 0.0, 0.0), "frame": "world",
                 "drpy_deg": tuple(round(float(v), 3) for v in rpy)}
+
+    def _carry_call(self, edge: Edge, call: dict) -> dict:
+        """Edge synthesis (Eq. 10) of a two-arm carry toward a region sub-goal: the same horizontal shift for
+        both hands, from the held object's centroid perceived now to the region's centre. The compiled shift
+        came from the first observation, and a recovery re-grasps the object wherever it fell."""
+        inner = [call[a] for a in ARMS if isinstance(call.get(a), dict)]
+        shifts = {tuple(i.get("dxyz", ())) for i in inner}
+        if (len(inner) < 2 or any(i.get("action") != "move_by_offset" or i.get("frame", "world") != "world"
+                                  for i in inner) or len(shifts) != 1):
+            return call
+        dxyz = next(iter(shifts))
+        if len(dxyz) != 3 or abs(dxyz[0]) + abs(dxyz[1]) < 1e-9:
+            return call
+        goal = self._region_goal(edge, {a["arm"] for a in inner})
+        if goal is None:
+            return call
+        obj, centre = goal
+        seen = self.robot.features({obj})[obj]
+        if not seen.visible or seen.centroid is None:
+            return call
+        shift = [round(float(centre[0] - seen.centroid[0]), 4), round(float(centre[1] - seen.centroid[1]), 4), dxyz[2]]
+        return {**call, **{i["arm"]: {**i, "dxyz": shift} for i in inner}}
+
+    def _region_goal(self, edge: Edge, arms: set[str]) -> tuple[str, tuple[float, float]] | None:
+        """(object, region centre x-y) of an `in_region` constraint of the edge's target on the centroid of an
+        object every one of `arms` holds now (both pads touching)."""
+        held = None
+        for arm in arms:
+            now = {k for k, n in self.robot.arm_state(arm).touching.items() if n == 2}
+            held = now if held is None else held & now
+        for c in self.graph.node(edge.target).constraints:
+            if c.kind != "in_region" or c.point.feature is not None or c.point.along is not None:
+                continue
+            if c.point.entity in (held or set()):
+                return c.point.entity, ((c.lo[0] + c.hi[0]) / 2.0, (c.lo[1] + c.hi[1]) / 2.0)
+        return None
 
     def _keyframe_call(self, edge: Edge, call: dict) -> dict:
         arm = call["arm"]
