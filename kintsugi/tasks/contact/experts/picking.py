@@ -100,8 +100,41 @@ def pick_box_fsm(ctx: ContactContext) -> list[StageFactory]:
     return [*pick_stages(ctx, "box"), settle("hold", 0.5, grip=0.0)]
 
 
+SINGLE_NOISE = 0.5
+"""MPPI's noise scale for the whole single-stage pick: one stage has one scale, so it is a compromise
+between reaching (centimetres) and coming down round the box (the FSM's descend uses DESCEND_NOISE)."""
+FUNNEL_IN_M = 0.008
+FUNNEL_OUT_M = 0.022
+"""The single cost lets the open fingers down to the grasp height within FUNNEL_IN_M of the grasp point
+across the pinch (open OPEN_MARGIN_M wider than the box, they clear it by about 12 mm) and keeps them above its top beyond
+FUNNEL_OUT_M, blended smoothly in between. Along the fingers an offset counts half."""
+SQUEEZE_M = 0.008
+"""The single cost closes the gripper command this far inside the box's width (12 N of squeeze) rather than
+to 0: MPPI moves a sampled command a few millimetres per step, so every millimetre of travel costs time."""
+CLOSE_FROM = 0.6
+"""The single cost's gripper target closes linearly from this fraction of the way between the box's top and
+the grasp height down to the grasp height (the pads meet the box a few millimetres above it)."""
+OPEN_MARGIN_M = 0.025
+"""The single cost opens this much wider than the box (the FSM opens 35 mm wider; less travel to close)."""
+HELD_N = 1.0
+"""Predicted force on each pad at which the single cost counts the box as pinched."""
+
+
+def funnel(offset: np.ndarray, yaw: float) -> np.ndarray:
+    """Smooth 1 -> 0 as the hand's xy offset (..., 2) from the grasp point grows from FUNNEL_IN_M to FUNNEL_OUT_M.
+
+    A hard switch on the offset put most sampled descents on its wrong side (the hand hovered over the box);
+    the fingers only hit the box when off across the pinch, so an offset along them counts half."""
+    across = -offset[..., 0] * np.sin(yaw) + offset[..., 1] * np.cos(yaw)
+    along = offset[..., 0] * np.cos(yaw) + offset[..., 1] * np.sin(yaw)
+    d = np.sqrt(across ** 2 + (along / 2) ** 2)
+    mid, half = (FUNNEL_IN_M + FUNNEL_OUT_M) / 2, (FUNNEL_OUT_M - FUNNEL_IN_M) / 2
+    return 1.0 - step_up(d, mid, half)
+
+
 def pick_single(ctx: ContactContext, obj: str) -> StageFactory:
-    """One cost for the whole pick: approach from above, open far / closed near, lift when held."""
+    """One cost for the whole pick: funnel down round the box, open far / closed at the grasp point,
+    lift once the (predicted) pads hold it. Done when it has been held lifted for a moment."""
     geo = ctx.known.geometry[obj]
     top = geo.height
     opening = ctx.cfg.effector.max_opening_m
@@ -109,31 +142,45 @@ def pick_single(ctx: ContactContext, obj: str) -> StageFactory:
 
     def make(obs: Observation) -> Stage:
         o = obs.objects[obj]
-        yaw, width = grasp_yaw(geo, o.quat, float(obs.ee[3]), opening)
+        others = [b.pos for k, b in obs.objects.items() if k != obj]
+        yaw, width = grasp_yaw(geo, o.quat, float(obs.ee[3]), opening, o.pos, others)
+        open_w = min(opening, width + OPEN_MARGIN_M)
+        squeeze = max(0.0, width - SQUEEZE_M)
         z0 = float(o.pos[2])
 
         def cost(v: View) -> np.ndarray:
             box = v.pos(obj)
             grasp_pt = box.copy()
             grasp_pt[..., 2] = box[..., 2] - z0 + z_grasp
-            xy = norm(v.tcp[..., :2] - grasp_pt[..., :2])
-            # stay above the box until aligned over it, then go down to the grasp height
-            height = np.where(xy > 0.01, top + CLEAR_M, grasp_pt[..., 2])
-            reach = 10 * xy + 10 * np.abs(v.tcp[..., 2] - height)
-            close = step_up(-xy - np.abs(v.tcp[..., 2] - grasp_pt[..., 2]), -0.012, 0.01)
-            want_open = (1 - close) * min(opening, width + 0.035)
-            lift = 20 * np.maximum(0.0, z0 + LIFT_M - box[..., 2])
-            run = (reach + lift + 200 * (v.ctrl[..., 4] - want_open) ** 2 + yaw_error(v.yaw, yaw) ** 2
-                   + W_SMOOTH * smoothness(v))
+            offset = v.tcp[..., :2] - grasp_pt[..., :2]
+            xy = norm(offset)
+            dz = v.tcp[..., 2] - grasp_pt[..., 2]
+            over = funnel(offset, yaw)
+            # always drawn down to the grasp height, but kept above a cone round the box (open fingers clear it)
+            cone = (1 - over) * (top + CLEAR_M - z_grasp)
+            # weights in proportion to the sampling noise per axis (z's is 2.5x smaller than x's), so MPPI's
+            # selection presses on every axis, not on xy alone (with 30 xy / 10 z the hand came down at 2 cm/s)
+            reach = 15 * xy + 30 * np.abs(dz) + 60 * np.maximum(0.0, cone - dz)
+            # close gradually on the way down round the box (MPPI moves a sampled command a few mm per step,
+            # so a close that waits for the grasp height would hold the hand up: open costs more the lower it
+            # gets), and keep squeezing whatever the pads hold (a sag must not open them)
+            down = over * np.clip(1 - dz / (CLOSE_FROM * (top - z_grasp)), 0.0, 1.0)
+            held = step_up(v.touch.min(axis=-1), HELD_N, 0.8)
+            closing = np.maximum(down, held)
+            want_open = closing * squeeze + (1 - closing) * open_w
+            grip = 15 * np.abs(v.ctrl[..., 4] - want_open)
+            lift = 30 * np.maximum(0.0, z0 + LIFT_M - box[..., 2])
+            run = reach + grip + lift + yaw_error(v.yaw, yaw) ** 2 + W_SMOOTH * smoothness(v)
             return total(run)
 
         def done(o2: Observation) -> bool:
             return bool(o2.objects[obj].pos[2] > z0 + LIFT_M - 0.02 and o2.touch.min() > 0.5)
 
-        return Stage("pick", cost, done, timeout_s=ctx.cfg.control.episode_s, goal={"lift_mm": LIFT_M * 1000})
+        return Stage("pick", cost, done, hold_s=0.5, timeout_s=ctx.cfg.control.episode_s, noise_scale=SINGLE_NOISE,
+                     goal={"lift_mm": LIFT_M * 1000})
 
     return make
 
 
 def pick_box_single(ctx: ContactContext) -> list[StageFactory]:
-    return [pick_single(ctx, "box"), settle("hold", 0.5, grip=None)]
+    return [pick_single(ctx, "box")]
