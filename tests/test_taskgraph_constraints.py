@@ -28,6 +28,7 @@ class ForeignObject:
     n_points: int
     top: np.ndarray
     upright: bool = True
+    extremes: dict | None = None
 
 
 def tilted(deg: float) -> tuple[float, float, float]:
@@ -39,6 +40,9 @@ F = Features(
     objects={
         "cup": ObjectState(centroid=(0.10, 0.0, 0.05), axis=(0.0, 0.0, -1.0), n_points=400),
         "bottle": ForeignObject(np.array([0.0, 0.0, 0.10]), np.array(tilted(30.0)), 20, np.array([0.0, 0.0, 0.25])),
+        # A spoon lying along y, its wide head (the axis end nearer the centroid) towards +y.
+        "spoon": ForeignObject(np.array([0.4, 0.02, 0.01]), np.array([0.0, 1.0, 0.0]), 300, np.array([0.4, 0.02, 0.02]),
+                               upright=False, extremes={"axis_pos": (0.4, 0.08, 0.01), "axis_neg": (0.4, -0.10, 0.01)}),
     },
     arms={"right": ArmState(eef=(0.0, 0.0, 0.30), opening=0.004, closed=True, touching=frozenset({"bottle"}))},
 )
@@ -72,7 +76,17 @@ GOLDEN = [
     ({"kind": "touching", "arm": "right", "object": "bottle"}, -1.0),
     ({"kind": "touching", "arm": "right", "object": "cup"}, 1.0),
     ({"kind": "touching", "arm": "right", "object": "bottle", "expect": False}, 1.0),
+    # heading: the lying spoon's head points +y (90 deg); off by |wrap(90 - yaw)| minus the tolerance.
+    ({"kind": "heading", "object": "spoon", "yaw_deg": 90.0, "tol_deg": 20.0}, -20.0),
+    ({"kind": "heading", "object": "spoon", "yaw_deg": -90.0, "tol_deg": 20.0}, 160.0),
+    ({"kind": "heading", "object": "spoon", "yaw_deg": 0.0, "tol_deg": 15.0}, 75.0),
 ]
+
+
+def test_heading_of_a_held_object_is_undecided():
+    held = Features(objects=dict(F.objects), arms={"right": ArmState(eef=(0.4, 0.0, 0.1), closed=True,
+                                                                      touching=frozenset({"spoon"}))})
+    assert math.isnan(make(kind="heading", object="spoon", yaw_deg=90.0, tol_deg=20.0).evaluate(held))
 
 
 @pytest.mark.parametrize("data,expected", GOLDEN, ids=[f"{d['kind']}-{i}" for i, (d, _) in enumerate(GOLDEN)])

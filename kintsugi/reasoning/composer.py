@@ -25,7 +25,7 @@ UPRIGHT_HEIGHT_RATIO = 0.6
 """Undecided uprightness: a standing cup is ~0.7 as tall as its largest extent, a fallen bottle ~0.3."""
 LIFTED_Z_M = 0.05
 """A held object whose lowest point is this high is clear of the table."""
-_FN = re.compile(r"^\$(x|y|z|hy|nhy|rx|ry|mirror)\(\s*(\?[A-Za-z0-9_]+)\s*(?:,\s*(-?[0-9.eE+-]+)\s*)?\)$")
+_FN = re.compile(r"^\$(x|y|z|hy|nhy|rx|ry|yaw|mirror)\(\s*(\?[A-Za-z0-9_]+)\s*(?:,\s*(-?[0-9.eE+-]+)\s*)?\)$")
 _FN2 = re.compile(r"^\$(dx|dy|turn)\(\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*,\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*\)$")
 FLAT_RATIO = 1.1
 """An object no taller than this times its middle extent lies flat (a fork, a tray, a cube; not a standing bottle)."""
@@ -203,8 +203,9 @@ def fill(value: Any, binding: dict[str, str], seen: dict[str, SeenObject], where
     """Instantiate a template: `?p` -> its value, `$x(?obj[, d])` -> the object's perceived centroid x (y, z)
     plus d, `$hy(?obj, d)` / `$nhy` -> +/- (half its perceived y extent + d), `$rx(?place)` / `$ry` -> the
     region's centre, `$dx(?obj, ?place)` / `$dy` -> region centre minus the object's centroid, `$turn(?obj,
-    ?dir)` -> the turn about the vertical bringing the object's head to the direction, `$mirror(?arm, v)` -> v
-    for the right arm, -v for the left; lists and dicts recursively. `where`: place -> (x, y)."""
+    ?dir)` -> the turn about the vertical bringing the object's head to the direction, `$yaw(?dir)` -> the
+    direction's yaw (degrees), `$mirror(?arm, v)` -> v for the right arm, -v for the left; lists and dicts
+    recursively. `where`: place -> (x, y)."""
     if isinstance(value, dict):
         return {k: fill(v, binding, seen, where) for k, v in value.items()}
     if isinstance(value, list):
@@ -230,6 +231,11 @@ def fill(value: Any, binding: dict[str, str], seen: dict[str, SeenObject], where
     d = float(num) if num is not None else 0.0
     if fn in ("rx", "ry"):
         return round(_where(value, arg, where or {})["xy".index(fn[1])] + d, 4)
+    if fn == "yaw":
+        psi = (where or {}).get(("direction", arg))
+        if psi is None:
+            raise PlanningError(f"template {value!r}: {arg!r} is not a known direction")
+        return round(float(psi) + d, 3)
     obj = seen.get(arg)
     if fn in ("hy", "nhy"):
         if obj is None or obj.extent is None:

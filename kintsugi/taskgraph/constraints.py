@@ -341,12 +341,53 @@ class Touching(_Template):
         yield (self.object, "object", None)
 
 
+def head_yaw_deg(obj: object) -> float | None:
+    """Yaw (degrees from +x about the vertical) of a long lying object's head: its wide head pulls the point
+    cloud's centroid towards it, so the axis end nearer the centroid (in x-y) is the head. None without ends."""
+    c, a, b = (vector_feature(obj, k) for k in ("centroid", "axis_pos", "axis_neg"))
+    if c is None or a is None or b is None:
+        return None
+    da, db = math.hypot(a[0] - c[0], a[1] - c[1]), math.hypot(b[0] - c[0], b[1] - c[1])
+    near, far = (a, b) if da <= db else (b, a)
+    dx, dy = float(near[0]) - float(far[0]), float(near[1]) - float(far[1])
+    if math.hypot(dx, dy) < 1e-6:
+        return None
+    return math.degrees(math.atan2(dy, dx))
+
+
+def wrap_deg(d: float) -> float:
+    return (d + 180.0) % 360.0 - 180.0
+
+
+class Heading(_Template):
+    """A lying object's head points along `yaw_deg` (about the vertical, from +x): |angle off| - tol (degrees).
+    Judged only while no hand touches it: a hand over its middle hides the points the head rule reads
+    (a held spoon's perceived head flips end to end), so a held object reads NaN, undecided."""
+
+    kind: Literal["heading"] = "heading"
+    object: Name
+    yaw_deg: Annotated[float, Field(strict=True, ge=-180.0, le=180.0)]
+    tol_deg: Annotated[float, Field(strict=True, gt=0.0, le=180.0)]
+
+    def evaluate(self, f: Features) -> float:
+        obj = f.objects.get(self.object)
+        if obj is None or any(self.object in arm.touching for arm in f.arms.values()):
+            return NAN
+        yaw = head_yaw_deg(obj)
+        return NAN if yaw is None else abs(wrap_deg(yaw - self.yaw_deg)) - self.tol_deg
+
+    def refs(self):
+        yield (self.object, "object", "axis_pos")
+        yield (self.object, "object", "axis_neg")
+
+
 TEMPLATES: tuple[type[_Template], ...] = (
-    Drift, Upright, Tilted, NotGrasped, Detached, Visibility, Misaligned, Near, Above, InRegion, Touching,
+    Drift, Upright, Tilted, NotGrasped, Detached, Visibility, Misaligned, Near, Above, InRegion, Touching, Heading,
 )
 
 Constraint = Annotated[
-    Union[Drift, Upright, Tilted, NotGrasped, Detached, Visibility, Misaligned, Near, Above, InRegion, Touching],
+    Union[Drift, Upright, Tilted, NotGrasped, Detached, Visibility, Misaligned, Near, Above, InRegion, Touching,
+          Heading],
     Field(discriminator="kind"),
 ]
 """Any template, chosen by its `kind` field in JSON."""

@@ -29,7 +29,7 @@ from kintsugi.config import StrictModel
 from kintsugi.errors import KintsugiError
 from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes
 from kintsugi.methods.agentchord.observe import ARMS, features
-from kintsugi.methods.agentchord.tops import Tops
+from kintsugi.methods.agentchord.tops import Heads, Tops
 from kintsugi.taskgraph.features import Features
 from kintsugi.taskgraph.forward import cost_to_go, guarded_next_edge, next_edge
 from kintsugi.taskgraph.model import Edge, TaskGraph
@@ -88,6 +88,12 @@ def _guard_objects(graph: TaskGraph, node: str) -> set[str]:
     return {e for x in graph.out_edges(node) for c in x.guard for e, role, _ in c.refs() if role != "arm"}
 
 
+def firing_arm(edge: Edge, firing: Firing) -> str | None:
+    """The arm the fired monitor watches (the first arm any of the edge's monitors reads when it names none)."""
+    mine = [m for m in edge.monitors if m.id == firing.monitor] or list(edge.monitors)
+    return next((e for m in mine for e, role, _ in m.check.refs() if role == "arm"), None)
+
+
 def _objects_of(edge: Edge) -> set[str]:
     names: set[str] = set()
     for m in edge.monitors:
@@ -115,6 +121,8 @@ class Conductor:
         self.ctg = cost_to_go(graph)
         self.tops = tops if tops is not None else Tops()
         """Which end of each object is its top (for standing a fallen object up the right way round)."""
+        self.heads = Heads()
+        """Which way each lying utensil's head points (for turning it to an absolute heading); `seed` it."""
         self.arms = {a.args.get("arm") for e in graph.edges for a in e.actions if isinstance(a.args.get("arm"), str)}
 
     # --- running ------------------------------------------------------------------
@@ -214,12 +222,12 @@ class Conductor:
 
     def _backtrack(self, failed: Edge, firing: Firing) -> str:
         """The latest nominal node before the failed edge whose constraints hold now (the start always does)."""
-        arms = [e for m in failed.monitors for e, role, _ in m.check.refs() if role == "arm"]
+        arm = firing_arm(failed, firing)
         chain = self._nominal_path()
         upto = chain[: chain.index(failed.source) + 1]
         names = {e for n in upto for c in self.graph.node(n).constraints for e, role, _ in c.refs() if role != "arm"}
-        if arms:
-            self.wait_still(arms[0], names | _objects_of(failed), failed)
+        if arm is not None:
+            self.wait_still(arm, names | _objects_of(failed), failed)
         f = features(self.robot, names)
         for n in reversed(upto):
             if all(not c.evaluate(f) > 0.0 for c in self.graph.node(n).constraints):
@@ -262,12 +270,12 @@ class Conductor:
         the same recovery again, since the failure context and its predicted state are the same."""
         g = self.graph
         edge = g.edge(firing.recovery)
-        self._settle(failed, edge)
+        self._settle(failed, edge, firing)
         while True:
             again = self._run_watched(edge)
             if again is not None:
                 self.log.event(self.robot.sim_time, "recovery disturbed", f"{edge.id}: {again}; run it again")
-                self._settle(failed, edge)
+                self._settle(failed, edge, firing)
                 return None
             if g.node(edge.target).kind == "nominal":
                 return edge.target
@@ -302,13 +310,14 @@ class Conductor:
             return f"{edge.target!r}: {bad} violated"
         return None
 
-    def _settle(self, failed: Edge, recovery: Edge) -> None:
+    def _settle(self, failed: Edge, recovery: Edge, firing: Firing) -> None:
         """Open the failing arm's gripper and keep it open until the objects its monitors watch have come to
         rest (two reads within SETTLE_M), so the recovery's perception-conditioned actions (a re-grasp) aim
-        at where a dropped object lies, not where it was falling."""
-        arms = [e for m in failed.monitors for e, role, _ in m.check.refs() if role == "arm"]
-        if arms:
-            self.wait_still(arms[0], _objects_of(failed), recovery)
+        at where a dropped object lies, not where it was falling. Only the arm whose monitor fired: the other
+        may still hold its own object (opening it dropped a fork while the spoon was recovered)."""
+        arm = firing_arm(failed, firing)
+        if arm is not None:
+            self.wait_still(arm, _objects_of(failed), recovery)
 
     def wait_still(self, arm: str, objs: set[str], edge: Edge) -> bool:
         """True once the objects are at rest; False if they still move after SETTLE_TRIES reads."""
@@ -319,6 +328,7 @@ class Conductor:
             self._execute(edge, "open_gripper", {"arm": arm})
             now = self.robot.features(objs)
             self.tops.observe(now)
+            self.heads.observe(now)
             seen = [now[k] for k in sorted(objs) if now[k].centroid is not None]
             pts = np.array([f.centroid for f in seen], dtype=float).reshape(-1, 3)  # none seen: (0, 3)
             axes = [None if f.axis is None else np.asarray(f.axis, dtype=float) for f in seen]
@@ -346,11 +356,15 @@ class Conductor:
             call = self._upright_call(call)
         if name == "drive":
             call = self._carry_call(edge, call)
+        if name == "rotate_eef" and call.get("axis") == "approach":
+            call = self._heading_call(edge, call)
         if self.metrics.fired_at is not None:  # the first command after a firing: detection -> recovery
             self.metrics.recovery_latency_steps.append(self.robot_steps() - self.metrics.fired_at)
             self.metrics.fired_at = None
         result = self.robot.execute(call)
-        self.tops.follow({a: self.robot.arm_state(a) for a in ARMS})
+        arm_states = {a: self.robot.arm_state(a) for a in ARMS}
+        self.tops.follow(arm_states)
+        self.heads.follow(arm_states)
         self.metrics.actions += 1
         self.metrics.episode_steps += result.steps // self.steps_per_tick
         arm = result.arms[0] if result.arms else "right"
@@ -390,6 +404,25 @@ class Conductor:
         rpy = Rotation.from_matrix(turn).as_euler("xyz", degrees=True)
         return {"action": "move_by_offset", "arm": arm, "dxyz": (0.0, 0.0, 0.0), "frame": "world",
                 "drpy_deg": tuple(round(float(v), 3) for v in rpy)}
+
+    def _heading_call(self, edge: Edge, call: dict) -> dict:
+        """Edge synthesis (Eq. 10) of a turn toward a `heading` sub-goal: the absolute turn about the vertical
+        that brings the held object's tracked head (`Heads`) to the sub-goal's yaw. The compiled angle was
+        relative to the first observation: wrong for an object re-grasped after it fell mid-turn."""
+        from kintsugi.methods.agentchord.tops import hand_rotation, held_by
+        from kintsugi.taskgraph.constraints import wrap_deg
+
+        state = self.robot.arm_state(call["arm"])
+        goal = next(((c.object, c.yaw_deg) for c in self.graph.node(edge.target).constraints
+                     if c.kind == "heading" and c.object in held_by(state)), None)
+        if goal is None or hand_rotation(state)[2, 2] > -0.9:  # a hand pointing down turns it about the vertical
+            return call
+        yaw = self.heads.yaw_deg(goal[0])
+        if yaw is None:
+            return call
+        # A hand pointing down turns what it holds by minus its own turn about the approach axis (the move
+        # slerps the short way, so this is the whole choice).
+        return {**call, "angle_deg": round(wrap_deg(yaw - goal[1]), 3)}
 
     def _carry_call(self, edge: Edge, call: dict) -> dict:
         """Edge synthesis (Eq. 10) of a two-arm carry toward a region sub-goal: the same horizontal shift for

@@ -41,6 +41,8 @@ perceived side (half a wall)."""
 CARRY_LIFT_M = 0.03
 UPEND_LIFT_M = 0.15
 """Standing a fallen object up: lift it this high before turning it (its lower half swings down)."""
+HEADING_TOL_DEG = 20.0
+"""A sub-goal `heading` holds when the perceived head (judged with no hand on the object) is this close to it."""
 REGION_TOL_M = 0.04
 """A sub-goal `in_region` holds when the perceived centroid is this close (x and y) to the region's centre."""
 
@@ -79,7 +81,8 @@ PREDICATES = [
        [{"kind": "in_region", "point": {"entity": "?1"}, "lo": [f"$rx(?2, -{REGION_TOL_M})", f"$ry(?2, -{REGION_TOL_M})",
                                                                 -1.0],
          "hi": [f"$rx(?2, {REGION_TOL_M})", f"$ry(?2, {REGION_TOL_M})", 2.0]}]),
-    _p("heading", ["object", "place"], "the lying object's head points in the direction"),
+    _p("heading", ["object", "place"], "the lying object's head points in the direction",
+       [{"kind": "heading", "object": "?1", "yaw_deg": "$yaw(?2)", "tol_deg": HEADING_TOL_DEG}]),
     _p("handed_over", ["object", "arm", "arm"], "the first arm held the object, then the second took it (history)"),
     _p("dropped", ["object"], "the object fell from a gripper (history; no action makes it)"),
     _p("inside", ["object", "object"], "the first object stands inside the second (a container)"),

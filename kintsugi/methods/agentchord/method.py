@@ -84,6 +84,7 @@ class AgentChord:
                       f"({len(compiled.result.rejected)} dropped by Eq. 8)")
             conductor = Conductor(g, robot, keyframes, log, steps_per_tick, compiled_kf, self.config)
             conductor.tops.observe(first.objects)
+            conductor.heads.seed(first.objects)
             try:
                 ok = conductor.run()
             finally:

@@ -18,7 +18,7 @@ from typing import Any, Literal
 from kintsugi.errors import ConfigError
 from kintsugi.methods import METHODS
 from kintsugi.methods.agentchord.compile import compile_graph, persistent_monitors
-from kintsugi.methods.agentchord.conductor import Conductor, ConductorConfig, Metrics
+from kintsugi.methods.agentchord.conductor import Conductor, ConductorConfig, Metrics, firing_arm
 from kintsugi.methods.agentchord.keyframes import TabletopKeyframes
 from kintsugi.methods.agentchord.method import LATENCY_MODEL_S, RunFigures
 from kintsugi.methods.agentchord.observe import seen_arms, seen_objects
@@ -115,7 +115,7 @@ class Replanning:
             edge = next_edge(graph, node, conductor.ctg)
             firing = conductor.run_edge(edge, with_monitors=True)
             if firing is not None:
-                self._settle(conductor, edge)
+                self._settle(conductor, edge, firing_arm(edge, firing))
                 return False, f"{firing.failure_mode} on {edge.id}"
             node = edge.target
             if not self._verify(graph, node):
@@ -124,12 +124,13 @@ class Replanning:
             self._remember(node)
         return conductor.goal_holds(), None
 
-    def _settle(self, conductor: Conductor, edge: Edge) -> None:
+    def _settle(self, conductor: Conductor, edge: Edge, arm: str | None = None) -> None:
         """Let a dropped object come to rest before the next observation is planned from (as AgentChord does).
         Recovery latency runs from the detection to the re-planned graph's first command, so it includes this."""
         m = conductor.metrics
         fired_at, m.fired_at = (m.fired_at if m.fired_at is not None else conductor.robot_steps()), None
-        arm = next((a.args["arm"] for a in edge.actions if isinstance(a.args.get("arm"), str)), None)
+        if arm is None:  # the fired monitor's arm; else the edge's first (the other may hold its own object)
+            arm = next((a.args["arm"] for a in edge.actions if isinstance(a.args.get("arm"), str)), None)
         if arm is not None:
             conductor.wait_still(arm, set(self.ctx.task.objects), edge)
         m.fired_at = fired_at

@@ -16,6 +16,8 @@ from typing import Any, Mapping
 import numpy as np
 from scipy.spatial.transform import Rotation
 
+from kintsugi.taskgraph.constraints import head_yaw_deg
+
 UP = np.array([0.0, 0.0, 1.0])
 
 
@@ -81,3 +83,34 @@ class Tops:
         world = np.column_stack([UP, out, np.cross(UP, out)])
         hand = np.column_stack([top, approach, np.cross(top, approach)])
         return world @ hand.T @ rot.T
+
+
+class Heads(Tops):
+    """Signed axis pointing to each long lying object's head, kept the same way as the tops.
+
+    The head is read once, at the first observation (`seed`: arms home, nothing on the object), as the axis
+    end nearer the point cloud's centroid (the wide head pulls it). From then on its sign comes from the
+    hand's encoders while held and from continuity while it lies or falls, never again from that rule: a hand
+    over a utensil's middle hides the points it reads (a held spoon's perceived head flips end to end)."""
+
+    def seed(self, objects: Mapping[str, Any]) -> None:
+        for name, f in objects.items():
+            if not getattr(f, "visible", False) or f.axis is None or f.upright is not False:
+                continue
+            yaw = head_yaw_deg(f)
+            if yaw is not None:
+                a = np.asarray(f.axis, dtype=float)
+                a = a / max(float(np.linalg.norm(a)), 1e-12)
+                head = np.array([np.cos(np.radians(yaw)), np.sin(np.radians(yaw)), 0.0])
+                self.world[name] = a if float(a @ head) >= 0.0 else -a
+
+    def observe(self, objects: Mapping[str, Any]) -> None:
+        """Sign each seeded object's perceived axis like its current estimate (no new heads: see `seed`)."""
+        super().observe({k: f for k, f in objects.items() if k in self.world})
+
+    def yaw_deg(self, name: str) -> float | None:
+        """The head's yaw about the vertical, degrees from +x; None when unknown."""
+        h = self.world.get(name)
+        if h is None or np.hypot(h[0], h[1]) < 1e-6:
+            return None
+        return float(np.degrees(np.arctan2(h[1], h[0])))
