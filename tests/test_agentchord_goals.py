@@ -70,11 +70,11 @@ def test_handover_goal_plans_take_then_let_go_and_place_in_the_named_region() ->
     block = _box("block", (0.4, 0.2), (0.05, 0.05, 0.05), upright=True)
     goal = ["handed_over(block, left, right)", "not dropped(block)", "in_region(block, target)", "flat(block)",
             "released(block)"]
-    reply = _compose("Pick up the block with the left arm, hand it over to the right arm, and place it.", goal,
-                     [block], {"target": (0.40, -0.25)})
+    said = "Pick up the block with the left arm, hand it over to the right arm, and place it."
+    reply = _compose(said, goal, [block], {"target": (0.40, -0.25)})
     assert _ops(reply) == ["grasp(left, block)", "lift(left, block)", "take_over(right, left, block)",
                            "let_go(left, right, block)", "carry_to(right, block, target)", "place_at(right, block, target)"]
-    req = ArrangerRequest(task="hand over", graph=reply.graph, node_facts=reply.node_facts,
+    req = ArrangerRequest(task=said, graph=reply.graph, node_facts=reply.node_facts,
                           edge_operators=reply.edge_operators, objects=[block], arms=ARMS, domain=TABLETOP_DOMAIN,
                           regions={"target": (0.40, -0.25)})
     watched = {(p["edge"], p["monitor"]["failure_mode"], p["monitor"]["check"].get("arm"))
@@ -82,6 +82,15 @@ def test_handover_goal_plans_take_then_let_go_and_place_in_the_named_region() ->
     assert ("e3_take_over", "drop", "left") in watched  # the giver still holds it while the taker comes in
     assert not any(e == "e4_let_go" and m == "drop" and a == "left" for e, m, a in watched)  # lets go on purpose
     assert ("e5_carry_to", "drop", "right") in watched
+    # After the handover the block is the right arm's: a drop there is picked up again by the right arm (the
+    # left may not reach where it fell); before it, only the left takes it from the table.
+    props = {(p["edge"], p["monitor"]["failure_mode"], p["monitor"]["check"].get("arm")): p
+             for p in embedded_arrange(req).proposals}
+
+    def takers(key: tuple) -> set[str]:
+        return {a["args"]["arm"] for e in props[key]["edges"] for a in e["actions"] if a["name"] == "grasp"}
+    assert takers(("e5_carry_to", "drop", "right")) == {"right"}
+    assert takers(("e2_lift", "drop", "left")) == {"left"}
 
 
 def test_unknown_region_is_a_planning_error_naming_it() -> None:
