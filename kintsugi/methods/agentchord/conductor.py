@@ -47,6 +47,8 @@ SETTLE_READS = 2
 SETTLE_TRIES = 25
 
 
+GRASP_Z_MIN_M = 0.029
+"""A top-down grasp point is no lower than this (the pads' half length plus the table clearance)."""
 UPRIGHT_SWINGS_DEG = (0.0, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0)
 """Standing a held object up: the hand faces away from the shoulder, or swung this far about the vertical."""
 
@@ -358,6 +360,8 @@ class Conductor:
             call = self._carry_call(edge, call)
         if name == "rotate_eef" and call.get("axis") == "approach":
             call = self._heading_call(edge, call)
+        if name == "grasp" and call.get("yaw_deg") is None and call.get("grasp_offset") is None:
+            call = self._grasp_call(call)
         if self.metrics.fired_at is not None:  # the first command after a firing: detection -> recovery
             self.metrics.recovery_latency_steps.append(self.robot_steps() - self.metrics.fired_at)
             self.metrics.fired_at = None
@@ -423,6 +427,47 @@ class Conductor:
         # A hand pointing down turns what it holds by minus its own turn about the approach axis (the move
         # slerps the short way, so this is the whole choice).
         return {**call, "angle_deg": round(wrap_deg(yaw - goal[1]), 3)}
+
+    def _grasp_call(self, call: dict) -> dict:
+        """Edge synthesis (Eq. 10) of a top-down grasp on a utensil that must end at a heading: of the two hand
+        yaws that close across it, the one whose hand, once the utensil is turned to its heading, faces nearest
+        the way the arm points at the region (the grasp's own default picks by where it lies now; a utensil
+        fallen the other way round then needs a wrist turn the arm does not reach over the region). Kept only
+        when the arm reaches that grasp (IK checked before moving)."""
+        from scipy.spatial.transform import Rotation
+
+        from kintsugi.taskgraph.constraints import wrap_deg
+
+        arm, obj = call["arm"], call["obj"]
+        psi, centre = self._heading_goal(obj), self._region_of(obj)
+        head = self.heads.yaw_deg(obj)
+        seen = self.robot.features({obj})[obj]
+        if psi is None or centre is None or head is None or not seen.visible or seen.centroid is None:
+            return call
+        shoulder = np.asarray(self.keyframes.shoulders[arm], dtype=float)
+        radial = np.degrees(np.arctan2(centre[1] - shoulder[1], centre[0] - shoulder[0]))
+        final = min((psi, psi + 180.0), key=lambda y: abs(wrap_deg(y - radial)))
+        yaw = wrap_deg(head + final - psi)
+        c = np.array(seen.centroid, dtype=float)
+        c[2] = max(c[2], GRASP_Z_MIN_M)
+        rot = Rotation.from_euler("ZY", [np.radians(yaw), np.pi]).as_matrix()
+        state = self.robot.arm_state(arm)
+        if not self.keyframes.iks[arm].solve(c, rot, np.radians(state.joints_deg)).ok:
+            return call
+        return {**call, "yaw_deg": round(float(yaw), 3)}
+
+    def _heading_goal(self, obj: str) -> float | None:
+        return next((c.yaw_deg for n in self.graph.nodes for c in n.constraints
+                     if c.kind == "heading" and c.object == obj), None)
+
+    def _region_of(self, obj: str) -> tuple[float, float] | None:
+        """The centre (x, y) of a region some sub-goal puts the object's centroid in."""
+        for n in self.graph.nodes:
+            for c in n.constraints:
+                if (c.kind == "in_region" and c.point.entity == obj and c.point.feature is None
+                        and c.hi[0] - c.lo[0] < 1.0):
+                    return (c.lo[0] + c.hi[0]) / 2.0, (c.lo[1] + c.hi[1]) / 2.0
+        return None
 
     def _carry_call(self, edge: Edge, call: dict) -> dict:
         """Edge synthesis (Eq. 10) of a two-arm carry toward a region sub-goal: the same horizontal shift for
