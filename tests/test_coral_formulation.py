@@ -12,7 +12,7 @@ import pytest
 
 from kintsugi.errors import ReasoningError
 from kintsugi.reasoning.adapt import check_adaptation, embedded_adaptation
-from kintsugi.reasoning.coral_types import AdaptRequest, AttemptHistory, StageOutcome, SysIdSummary
+from kintsugi.reasoning.coral_types import AdaptRequest, AttemptHistory, ObjectState, StageOutcome, SysIdSummary
 from kintsugi.reasoning.costlib import compose
 from kintsugi.reasoning.formulate import check_formulation, embedded_formulation, request_variables, sample_env
 from kintsugi.sandbox import CostProgram
@@ -145,3 +145,21 @@ def test_the_press_lasts_as_long_as_the_instruction_says() -> None:
     assert compose(timed).knobs["hold_press_s"] == 3.5
     untimed = request("Push the box against the wall and press it with 4 N.", [BOX], [WALL])
     assert compose(untimed).knobs["hold_press_s"] == 2.0  # the library's default when the text names none
+
+
+def test_push_over_the_edge_then_pick_from_below() -> None:
+    board = ObjectState(name="board", label="cutting board", size_m=(0.34, 0.16, 0.02), pos_m=(0.05, 0.01, 0.01),
+                        yaw_deg=4.0, upright_deg=0.0)
+    req = request("Push the cutting board until its handle sticks out over the table edge, then pick the board up "
+                  "by the handle.", [board])
+    reply = compose(req)
+    assert [s.name for s in reply.stages] == ["approach", "push", "back-off", "reach", "descend", "grasp", "lift",
+                                              "hold"]
+    assert reply.regions[0].normal == (-1.0, 0.0, 0.0) and reply.stages[1].region == 0  # pushed on its back face
+    assert "table_edge_x" in reply.source and "board_hi" in reply.source  # reads the edge and the bounds, no numbers
+    checked, program, notes = check_formulation(reply, req, K, T)
+    assert notes == [] and program.has("edge_push_cost") and program.has("under_cost")
+    # the same words with a different object and a reworded instruction choose the same skill
+    tray = board.model_copy(update={"name": "tray", "label": "serving tray"})
+    again = compose(request("Slide the serving tray over the edge of the table, then lift it.", [tray]))
+    assert [s.name for s in again.stages] == [s.name for s in reply.stages] and "tray_hi" in again.source
