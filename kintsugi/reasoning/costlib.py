@@ -510,25 +510,35 @@ def _tip_cost(plan: Plan, name: str, o: ObjectState, edge: float, width: float, 
     return W_TIP * up + {touch} * standing + W_YAW * 0.5 * wrap_pi(yaw) ** 2 + W_SMOOTH * step_change''', k))
 
 
-def _tip(plan: Plan, o: ObjectState, axis: int, sign: float, k: dict[str, float], contact: bool) -> None:
+def _rise_and_turn(plan: Plan, o: ObjectState, axis: int, sign: float, k: dict[str, float], contact: bool,
+                   names: tuple[str, str], back_m: float, edge: float, width: float, deg_key: str,
+                   timeouts: tuple[float, float], withdraw_dz: float) -> None:
+    """Shared by tip and pivot: go to the object's back face high up (or blindly to it), push there until its
+    up axis has turned `k[deg_key]`, then withdraw and settle."""
     n = o.name
+    rise, turn = names
     region = None
     if contact:
         plan.regions.append(back_face(o, axis, sign, k["push_height"], 0.0, k))
         region = len(plan.regions) - 1
-        _approach(plan, "approach", o, axis, sign, f"start_{n}_lo[2] + {k['push_height']} * 2.0 * {n}_half[2]",
-                  0.04, k)
+        _approach(plan, rise, o, axis, sign, f"start_{n}_lo[2] + {k['push_height']} * 2.0 * {n}_half[2]",
+                  back_m, k)
     else:
-        _approach_blind(plan, "approach", o, k)
-    _tip_cost(plan, "tip", o, 0.75, 0.1, contact, k)
-    plan.code.append(f'''def tip_done({n}_up):
-    return {_tilt_code(n, k["tip_deg"])}''')
+        _approach_blind(plan, rise, o, k)
+    _tip_cost(plan, turn, o, edge, width, contact, k)
+    plan.code.append(f'''def {turn}_done({n}_up):
+    return {_tilt_code(n, k[deg_key])}''')
     plan.stages += [
-        StageSpec(name="approach", cost="approach_cost", done="approach_done", grip="closed", timeout_s=_t(k, 4.0)),
-        StageSpec(name="tip", cost="tip_cost", done="tip_done", grip="closed", region=region, timeout_s=_t(k, 5.0)),
+        StageSpec(name=rise, cost=f"{rise}_cost", done=f"{rise}_done", grip="closed", timeout_s=_t(k, timeouts[0])),
+        StageSpec(name=turn, cost=f"{turn}_cost", done=f"{turn}_done", grip="closed", region=region,
+                  timeout_s=_t(k, timeouts[1])),
     ]
-    _withdraw(plan, o, axis, sign, k["flip_deg"], k, 0.06)
+    _withdraw(plan, o, axis, sign, k["flip_deg"], k, withdraw_dz)
     _settle(plan, "settle", 0.3, "closed", k)
+
+
+def _tip(plan: Plan, o: ObjectState, axis: int, sign: float, k: dict[str, float], contact: bool) -> None:
+    _rise_and_turn(plan, o, axis, sign, k, contact, ("approach", "tip"), 0.04, 0.75, 0.1, "tip_deg", (4.0, 5.0), 0.06)
     plan.why.append(f"'{o.label}' stands taller than it is wide: push it high on its back "
                     f"({'at ' + str(k['push_height']) + ' of its height' if contact else 'no contact region'}) "
                     f"until it tips past {k['tip_deg']:g} deg, then draw the hand back and let it settle.")
@@ -536,28 +546,10 @@ def _tip(plan: Plan, o: ObjectState, axis: int, sign: float, k: dict[str, float]
 
 def _pivot(plan: Plan, o: ObjectState, fixture: str, axis: int, sign: float, k: dict[str, float],
            contact: bool) -> None:
-    n = o.name
     _push(plan, o, fixture, axis, sign, {**k, "timeout_scale": k["timeout_scale"]}, contact)
     plan.stages[-1] = plan.stages[-1].model_copy(update={"hold_s": 0.2})
     plan.why.pop()
-    region = None
-    if contact:
-        plan.regions.append(back_face(o, axis, sign, k["push_height"], 0.0, k))
-        region = len(plan.regions) - 1
-        _approach(plan, "rise", o, axis, sign, f"start_{n}_lo[2] + {k['push_height']} * 2.0 * {n}_half[2]",
-                  0.035, k)
-    else:
-        _approach_blind(plan, "rise", o, k)
-    _tip_cost(plan, "pivot", o, 0.5, 0.2, contact, k)
-    plan.code.append(f'''def pivot_done({n}_up):
-    return {_tilt_code(n, k["pivot_deg"])}''')
-    plan.stages += [
-        StageSpec(name="rise", cost="rise_cost", done="rise_done", grip="closed", timeout_s=_t(k, 4.0)),
-        StageSpec(name="pivot", cost="pivot_cost", done="pivot_done", grip="closed", region=region,
-                  timeout_s=_t(k, 6.0)),
-    ]
-    _withdraw(plan, o, axis, sign, k["flip_deg"], k, 0.05)
-    _settle(plan, "settle", 0.3, "closed", k)
+    _rise_and_turn(plan, o, axis, sign, k, contact, ("rise", "pivot"), 0.035, 0.5, 0.2, "pivot_deg", (4.0, 6.0), 0.05)
     plan.why.append(f"'{o.label}' lies flat and '{fixture}' stops its far edge: push it against '{fixture}', "
                     f"then push high on its back so it pivots over the fixture past {k['pivot_deg']:g} deg "
                     "(past upright, so it does not fall back), withdraw and let it settle.")
