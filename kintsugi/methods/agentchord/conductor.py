@@ -124,6 +124,8 @@ class Conductor:
         self.tops = tops if tops is not None else Tops()
         """Which end of each object is its top (for standing a fallen object up the right way round)."""
         self.heads = Heads()
+        self.missed: dict[tuple[str, str], int] = {}
+        """(arm, object) -> grasps in a row that closed on nothing (see `_grasp_outcome`)."""
         """Which way each lying utensil's head points (for turning it to an absolute heading); `seed` it."""
         self.arms = {a.args.get("arm") for e in graph.edges for a in e.actions if isinstance(a.args.get("arm"), str)}
 
@@ -366,6 +368,8 @@ class Conductor:
             self.metrics.recovery_latency_steps.append(self.robot_steps() - self.metrics.fired_at)
             self.metrics.fired_at = None
         result = self.robot.execute(call)
+        if name == "grasp" and isinstance(call.get("obj"), str):
+            self._grasp_outcome(call)
         arm_states = {a: self.robot.arm_state(a) for a in ARMS}
         self.tops.follow(arm_states)
         self.heads.follow(arm_states)
@@ -439,6 +443,9 @@ class Conductor:
         from kintsugi.taskgraph.constraints import wrap_deg
 
         arm, obj = call["arm"], call["obj"]
+        misses = self.missed.get((arm, obj), 0)
+        if misses % 2 == 1:  # the chosen yaw missed: the default next (and the chosen one again after that)
+            return call
         psi, centre = self._heading_goal(obj), self._region_of(obj)
         head = self.heads.yaw_deg(obj)
         seen = self.robot.features({obj})[obj]
@@ -455,6 +462,15 @@ class Conductor:
         if not self.keyframes.iks[arm].solve(c, rot, np.radians(state.joints_deg)).ok:
             return call
         return {**call, "yaw_deg": round(float(yaw), 3)}
+
+    def _grasp_outcome(self, call: dict) -> None:
+        """Count grasps that closed on nothing in a row: the next one is tried the other way (chosen yaw <->
+        default), so a recovery that re-runs it does not repeat the same miss."""
+        key = (call["arm"], call["obj"])
+        if call["obj"] in self.robot.grip_sense(call["arm"]).touching:
+            self.missed.pop(key, None)
+        else:
+            self.missed[key] = self.missed.get(key, 0) + 1
 
     def _heading_goal(self, obj: str) -> float | None:
         return next((c.yaw_deg for n in self.graph.nodes for c in n.constraints
