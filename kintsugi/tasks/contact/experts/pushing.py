@@ -19,7 +19,7 @@ from kintsugi.tasks.contact.fsm import Stage, StageFactory
 from kintsugi.tasks.contact.push_force import wall_face_x
 from kintsugi.tasks.contact.robot import Feedback, Observation
 from kintsugi.tasks.contact.spec import corners
-from kintsugi.tasks.contact.world import rotate
+from kintsugi.tasks.contact.world import rotate, yaw_of
 
 PUSH_Z = 0.008
 """Fingertip height while pushing: low on the box's side, so it slides rather than tips."""
@@ -119,21 +119,113 @@ def push_force_fsm(ctx: ContactContext) -> list[StageFactory]:
     return [approach, to_wall, hold]
 
 
+SINGLE_NOISE = 0.3
+"""MPPI's noise scale for the whole single-stage push: one stage has one scale, a compromise between
+reaching behind the box (centimetres) and holding 5 N on a 600 N/m servo (the FSM's press uses 0.15)."""
+CLEAR_M = 0.02
+"""The single cost keeps the fingertips this far above the box's top anywhere ahead of its back face."""
+ENGAGED_M = 0.01
+"""The single cost counts a push only with the TCP this close to the back-face patch (blended over a few mm)."""
+PUSHING_N = 2.5
+"""Measured push force around which the single stage's Eq. 5 term fades in (a free hand reads < 1 N)."""
+
+
+def _pushing_feedback(cfg: PushForceConfig) -> Feedback:
+    """Eq. 5 on the measured push force, its gain faded in smoothly with that force: the term trims a push
+    that is on, and stays out of a free hand's way (one stage runs throughout; the FSM only runs it while
+    it presses)."""
+    base = _feedback(cfg)
+
+    def apply(obs: Observation, planned: np.ndarray) -> np.ndarray:
+        w = float(step_up(np.array(obs.force[0]), PUSHING_N, 1.5))
+        return planned + w * (base(obs, planned) - planned)
+
+    return apply
+
+
+FACE_HALF_Y_M = 0.01
+FACE_Z_M = (0.004, 0.016)
+"""Where on the back face the single cost lets the closed fingers push: within FACE_HALF_Y_M of its middle,
+the TCP this high (a point target pulled the fingers down along the face while they pressed on it: pad
+friction held them, and the planner paid for the slide with a weaker push)."""
+
+
+Z_WEIGHT = 2.5
+"""How much a height error counts against an xy one in `to_face`: z's sampling noise is 2.5x smaller than x's,
+so an unweighted z came down slowly."""
+
+
+def _box_frame(v: View) -> tuple[np.ndarray, np.ndarray]:
+    """The TCP's (x, y) offset from the box centre, in the box's yaw frame, each (K, T)."""
+    yaw = yaw_of(v.quat("box"))
+    d = v.tcp[..., :2] - v.pos("box")[..., :2]
+    return d[..., 0] * np.cos(yaw) + d[..., 1] * np.sin(yaw), -d[..., 0] * np.sin(yaw) + d[..., 1] * np.cos(yaw)
+
+
+def to_face(ctx: ContactContext, v: View) -> np.ndarray:
+    """(K, T) distance from the TCP to where the closed fingers push the box's back face (a patch, not a point)."""
+    hx = ctx.known.geometry["box"].parts[0].half[0]
+    local_x, local_y = _box_frame(v)
+    z = v.tcp[..., 2]
+    off = np.stack([local_x - (-hx - PADDLE), np.maximum(0.0, np.abs(local_y) - FACE_HALF_Y_M),
+                    Z_WEIGHT * (np.maximum(0.0, FACE_Z_M[0] - z) + np.maximum(0.0, z - FACE_Z_M[1]))], axis=-1)
+    return norm(off)
+
+
+def ahead_of_back(ctx: ContactContext, v: View) -> np.ndarray:
+    """Smooth 0 -> 1 as the TCP moves ahead (box frame +x) of where the closed fingers touch the back face
+    (from about 5 mm on: a finger that far ahead would come down on the box's top edge)."""
+    hx = ctx.known.geometry["box"].parts[0].half[0]
+    local_x, _ = _box_frame(v)
+    return step_up(local_x - (-hx - PADDLE), 0.008, 0.003)
+
+
 def push_force_single(ctx: ContactContext) -> list[StageFactory]:
-    """One cost: push the box to the wall; the force term switches on (smoothly) as the gap closes."""
+    """One cost for the whole task: push with the target force, at the back face, toward the wall.
+
+    The force term is never switched off: every sample pays for its push's distance from the target (no push
+    where the hand is not at the back face), so pushing the box at all is better than not. The former single
+    cost switched a force term on as the predicted box reached the wall: arriving there with the sliding
+    force (~2 N) cost more than stopping 1-2 cm short, where the box stayed. Coming straight at the attractor
+    the hand landed on the box's top edge: it is kept above the box's top anywhere ahead of the back face.
+    (The FSM's contact region is only drawn in videos; the cost uses the patch of `to_face`.)"""
     cfg: PushForceConfig = ctx.cfg  # type: ignore[assignment]
-    attract, gap, push, press, _, _ = _costs(ctx)
+    attract, gap, _, _, pts, face = _costs(ctx)
+    top = ctx.known.geometry["box"].height
+    target, tol = cfg.force.target_n, cfg.force.tolerance_n
+    kp = cfg.effector.kp_n_per_m
 
     def make(obs: Observation) -> Stage:
         y0 = float(obs.objects["box"].pos[1])
 
         def cost(v: View) -> np.ndarray:
-            at_wall = step_up(-gap(v), -0.004, 0.003)
-            return total((1 - at_wall) * push(v, y0) + at_wall * press(v))
+            att = to_face(ctx, v)
+            # the push force of a position servo at rest is its stiffness times how far the command leads the
+            # hand: asking for that lead is exact where the predicted wrist force is noisy (it also feels the
+            # hand's own accelerations: jerking a free hand read 3-4 N); away from the back face no push counts
+            at_face = step_up(-att, -ENGAGED_M, 0.006)
+            hand_x = v.batch.qpos[:, :, v.layout.ee_qpos[0]]  # the servo's own coordinate (the TCP is offset)
+            push_n = kp * (v.ctrl[..., 0] - hand_x)
+            f_err = (at_face * np.abs(push_n - target) + (1 - at_face) * target) / tol
+            # a little against pushing sideways (the fingers slid along the face, the x force dipping); more, and
+            # every sample's sideways noise outweighed what its x command did (at 3 per N no sample beat the plan)
+            side_n = at_face * kp * np.abs(v.ctrl[..., 1] - v.batch.qpos[:, :, v.layout.ee_qpos[1]])
+            over = np.maximum(0.0, top + CLEAR_M - v.tcp[..., 2]) * ahead_of_back(ctx, v)
+            speed = np.abs(v.vel("box")[..., 0])
+            # the force now counts most: it is what the next command does (later knots are replanned anyway)
+            soon = np.linspace(2.0, 0.5, f_err.shape[1])
+            run = (3 * soon * f_err + 0.2 * side_n + 300 * att + 30 * np.maximum(gap(v), 0.0) + 300 * over
+                   + 5 * np.abs(v.pos("box")[..., 1] - y0) + 20 * np.maximum(speed - 0.08, 0.0)
+                   + 10 * np.abs(yaw_error(v.yaw, 0.0)) + W_SMOOTH * smoothness(v))
+            return total(run)
 
-        tol = 0.6 * cfg.force.tolerance_n
-        return Stage("push-press", cost, lambda o: abs(o.force[0] - cfg.force.target_n) < tol, grip=0.0,
-                     hold_s=cfg.force.duration_s + 0.5, timeout_s=cfg.control.episode_s,
-                     attractors=(attract,), goal={"force_n": cfg.force.target_n})
+        def done(o: Observation) -> bool:  # the right force, on a box that is against the wall
+            b = o.objects["box"]
+            return bool(abs(o.force[0] - target) < 0.6 * tol and face - front_x(b.pos, b.quat, pts) < 0.002)
+
+        return Stage("push-press", cost, done, grip=0.0, hold_s=cfg.force.duration_s + 0.5,
+                     timeout_s=cfg.control.episode_s, noise_scale=SINGLE_NOISE, attractors=(attract,),
+                     feedback=_pushing_feedback(cfg),
+                     goal={"force_n": target})
 
     return [make]
