@@ -11,10 +11,17 @@ Success rates with a Wilson CI come from `kintsugi bench fold-towel` (see the fi
 (d) `--grasp`: how the pinch takes a bottom corner when the corners the script is given are off by a
     few millimetres (ground truth plus a known offset, along and across the corner's diagonal): after
     a 6 cm lift the corner either hangs at the fingertips (about -25 mm below the tool centre point)
-    or has popped up into the pinch (about 0 mm). Both modes occur within 0.3 mm of offset at the
-    script's own inset and tip clearance, which is why perceived corners (0-3 mm off) fold so rarely.
+    or has popped up into the pinch (about 0 mm). Both modes occur within 0.3 mm of offset at the old
+    script's 8 mm inset and 1.5 mm tip clearance, which is why perceived corners (0-3 mm off) folded so
+    rarely; at the script's 12 mm / 0.5 mm the corner hangs in every case.
 
-    .venv/bin/python bench/bench_fold_towel.py --grasp [--inset 0.012 --tip 0.0005]
+    .venv/bin/python bench/bench_fold_towel.py --grasp [--inset 0.008 --tip 0.0015]
+(e) `--grip`: the scripted fold (perceived corners, `pose`) at each squeeze in `--forces`: folded, and
+    released (no pad touching the towel at the end). At the rigid tasks' 20 N the pads' edges press
+    through the coarse cloth, whose corner triangles then stay wrapped round a pad when it opens and
+    ride up with it; the task's 8 N pinch holds the towel and lets it go.
+
+    .venv/bin/python bench/bench_fold_towel.py --grip [--forces 8 20] [--trials 10]
 """
 
 from __future__ import annotations
@@ -105,6 +112,18 @@ def grasp_modes(seed: int, inset: float, tip: float) -> list[tuple[float, float,
     return out
 
 
+def grip_sweep(forces: list[float], trials: int) -> None:
+    """(e) Fold and release outcome per squeeze, over the same `pose` trials."""
+    for force in forces:
+        folded = released = 0
+        for seed in range(trials):
+            r = run_trial(TrialSpec(task="fold-towel", method="scripted", variant="default", condition="pose",
+                                    seed=seed, overrides={"robot.grip_force_n": force}))
+            folded += r.success
+            released += bool(r.details.get("released"))
+        print(f"grip {force:g} N: {folded}/{trials} folded, {released}/{trials} released (perceived corners, pose)")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--trials", type=int, default=3)
@@ -112,12 +131,18 @@ def main() -> None:
     ap.add_argument("--grasp", action="store_true", help="only (d): grasp mode against corner offsets")
     ap.add_argument("--inset", type=float, default=None, help="(d) grasp inset, m (default: the script's)")
     ap.add_argument("--tip", type=float, default=None, help="(d) fingertip clearance, m (default: the script's)")
+    ap.add_argument("--grip", action="store_true", help="only (e): fold and release outcome per squeeze")
+    ap.add_argument("--forces", type=float, nargs="+", default=[8.0, 20.0], help="(e) squeezes, N")
     args = ap.parse_args()
     load_all()
+    if args.grip:
+        grip_sweep(args.forces, args.trials)
+        return
     if args.grasp:
         from kintsugi.tasks.tabletop import fold_towel as ft
 
-        inset, tip = args.inset or ft.INSET_M, args.tip or ft.TIP_CLEARANCE_M
+        inset = ft.INSET_M if args.inset is None else args.inset
+        tip = ft.TIP_CLEARANCE_M if args.tip is None else args.tip
         for seed in (1, 2):
             rows = grasp_modes(seed, inset, tip)
             for a, b, arm, dz in rows:
