@@ -7,6 +7,8 @@ by distance (open far away, closed near the grasp point, lift once held).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from kintsugi.tasks.contact.context import ContactContext
@@ -106,8 +108,8 @@ between reaching (centimetres) and coming down round the box (the FSM's descend 
 FUNNEL_IN_M = 0.008
 FUNNEL_OUT_M = 0.022
 """The single cost lets the open fingers down to the grasp height within FUNNEL_IN_M of the grasp point
-across the pinch (open OPEN_MARGIN_M wider than the box, they clear it by about 12 mm) and keeps them above its top beyond
-FUNNEL_OUT_M, blended smoothly in between. Along the fingers an offset counts half."""
+across the pinch (open OPEN_MARGIN_M wider than the box, they clear it by about 12 mm) and keeps them above
+its top beyond FUNNEL_OUT_M, blended smoothly in between. Along the fingers an offset counts half."""
 SQUEEZE_M = 0.008
 """The single cost closes the gripper command this far inside the box's width (12 N of squeeze) rather than
 to 0: MPPI moves a sampled command a few millimetres per step, so every millimetre of travel costs time."""
@@ -132,45 +134,66 @@ def funnel(offset: np.ndarray, yaw: float) -> np.ndarray:
     return 1.0 - step_up(d, mid, half)
 
 
+@dataclass(frozen=True)
+class GraspTerms:
+    """The single-stage pick's hand terms for one box, fixed when the stage starts (side to pinch, widths)."""
+
+    obj: str
+    yaw: float
+    open_w: float
+    squeeze: float
+    z0: float
+    top: float
+    z_grasp: float
+
+    def __call__(self, v: View) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(reach cost, gripper command wanted, held in [0, 1]), each (K, T), on the predicted state."""
+        box = v.pos(self.obj)
+        grasp_pt = box.copy()
+        grasp_pt[..., 2] = box[..., 2] - self.z0 + self.z_grasp
+        offset = v.tcp[..., :2] - grasp_pt[..., :2]
+        dz = v.tcp[..., 2] - grasp_pt[..., 2]
+        over = funnel(offset, self.yaw)
+        # always drawn down to the grasp height, but kept above a cone round the box (open fingers clear it)
+        cone = (1 - over) * (self.top + CLEAR_M - self.z_grasp)
+        # weights in proportion to the sampling noise per axis (z's is 2.5x smaller than x's), so MPPI's
+        # selection presses on every axis, not on xy alone (with 30 xy / 10 z the hand came down at 2 cm/s)
+        reach = 15 * norm(offset) + 30 * np.abs(dz) + 60 * np.maximum(0.0, cone - dz)
+        # close gradually on the way down round the box (MPPI moves a sampled command a few mm per step,
+        # so a close that waits for the grasp height would hold the hand up: open costs more the lower it
+        # gets), and keep squeezing whatever the pads hold (a sag must not open them)
+        down = over * np.clip(1 - dz / (CLOSE_FROM * (self.top - self.z_grasp)), 0.0, 1.0)
+        held = step_up(v.touch.min(axis=-1), HELD_N, 0.8)
+        closing = np.maximum(down, held)
+        return reach, closing * self.squeeze + (1 - closing) * self.open_w, held
+
+
+def grasp_terms(ctx: ContactContext, obj: str, obs: Observation, squeeze_m: float = SQUEEZE_M) -> GraspTerms:
+    """The grasp side (clear of other objects, as the FSM chooses it) and the widths for the box as seen now;
+    `squeeze_m`: how far inside the box's width the gripper command closes."""
+    geo = ctx.known.geometry[obj]
+    opening = ctx.cfg.effector.max_opening_m
+    o = obs.objects[obj]
+    others = [b.pos for k, b in obs.objects.items() if k != obj]
+    yaw, width = grasp_yaw(geo, o.quat, float(obs.ee[3]), opening, o.pos, others)
+    return GraspTerms(obj=obj, yaw=yaw, open_w=min(opening, width + OPEN_MARGIN_M),
+                      squeeze=max(0.0, width - squeeze_m), z0=float(o.pos[2]), top=geo.height,
+                      z_grasp=grasp_height(ctx, obj))
+
+
 def pick_single(ctx: ContactContext, obj: str) -> StageFactory:
     """One cost for the whole pick: funnel down round the box, open far / closed at the grasp point,
     lift once the (predicted) pads hold it. Done when it has been held lifted for a moment."""
-    geo = ctx.known.geometry[obj]
-    top = geo.height
-    opening = ctx.cfg.effector.max_opening_m
-    z_grasp = grasp_height(ctx, obj)
 
     def make(obs: Observation) -> Stage:
-        o = obs.objects[obj]
-        others = [b.pos for k, b in obs.objects.items() if k != obj]
-        yaw, width = grasp_yaw(geo, o.quat, float(obs.ee[3]), opening, o.pos, others)
-        open_w = min(opening, width + OPEN_MARGIN_M)
-        squeeze = max(0.0, width - SQUEEZE_M)
-        z0 = float(o.pos[2])
+        hand = grasp_terms(ctx, obj, obs)
+        z0 = hand.z0
 
         def cost(v: View) -> np.ndarray:
-            box = v.pos(obj)
-            grasp_pt = box.copy()
-            grasp_pt[..., 2] = box[..., 2] - z0 + z_grasp
-            offset = v.tcp[..., :2] - grasp_pt[..., :2]
-            xy = norm(offset)
-            dz = v.tcp[..., 2] - grasp_pt[..., 2]
-            over = funnel(offset, yaw)
-            # always drawn down to the grasp height, but kept above a cone round the box (open fingers clear it)
-            cone = (1 - over) * (top + CLEAR_M - z_grasp)
-            # weights in proportion to the sampling noise per axis (z's is 2.5x smaller than x's), so MPPI's
-            # selection presses on every axis, not on xy alone (with 30 xy / 10 z the hand came down at 2 cm/s)
-            reach = 15 * xy + 30 * np.abs(dz) + 60 * np.maximum(0.0, cone - dz)
-            # close gradually on the way down round the box (MPPI moves a sampled command a few mm per step,
-            # so a close that waits for the grasp height would hold the hand up: open costs more the lower it
-            # gets), and keep squeezing whatever the pads hold (a sag must not open them)
-            down = over * np.clip(1 - dz / (CLOSE_FROM * (top - z_grasp)), 0.0, 1.0)
-            held = step_up(v.touch.min(axis=-1), HELD_N, 0.8)
-            closing = np.maximum(down, held)
-            want_open = closing * squeeze + (1 - closing) * open_w
+            reach, want_open, _ = hand(v)
             grip = 15 * np.abs(v.ctrl[..., 4] - want_open)
-            lift = 30 * np.maximum(0.0, z0 + LIFT_M - box[..., 2])
-            run = reach + grip + lift + yaw_error(v.yaw, yaw) ** 2 + W_SMOOTH * smoothness(v)
+            lift = 30 * np.maximum(0.0, z0 + LIFT_M - v.pos(obj)[..., 2])
+            run = reach + grip + lift + yaw_error(v.yaw, hand.yaw) ** 2 + W_SMOOTH * smoothness(v)
             return total(run)
 
         def done(o2: Observation) -> bool:

@@ -11,9 +11,9 @@ import numpy as np
 
 from kintsugi.tasks.contact.config import PickClutterConfig
 from kintsugi.tasks.contact.context import ContactContext
-from kintsugi.tasks.contact.costs import View, norm, smoothness, step_up, total
+from kintsugi.tasks.contact.costs import View, norm, smoothness, step_up, total, yaw_error
 from kintsugi.tasks.contact.experts.common import W_SMOOTH, hold_tcp, near
-from kintsugi.tasks.contact.experts.picking import LIFT_M, pick_single, pick_stages
+from kintsugi.tasks.contact.experts.picking import SINGLE_NOISE, grasp_terms, pick_stages
 from kintsugi.tasks.contact.fsm import Stage, StageFactory
 from kintsugi.tasks.contact.robot import Observation
 
@@ -65,31 +65,73 @@ def pick_clutter_fsm(ctx: ContactContext) -> list[StageFactory]:
     return [*pick_stages(ctx, "box"), *place_stages(ctx, "box")]
 
 
+CARRY_LIFT_M = 0.06
+"""How high the single cost carries the box's bottom above the table (every distractor is at most 5 cm tall,
+and they stand round the box's start)."""
+GOAL_IN_M = 0.006
+GOAL_OUT_M = 0.025
+"""The single cost keeps the box above the carry height beyond GOAL_OUT_M of the goal and lets it down to
+the table within GOAL_IN_M, blended smoothly in between (the same funnel as the hand's round the box)."""
+
+
+SET_DOWN_LIFT_M = 0.025
+"""Box bottom height over the goal below which the single cost lets go (a drop of up to 2.5 cm: the planner
+brought a held box down to 10-13 mm slowly and no lower within the episode)."""
+PLACE_SQUEEZE_M = 0.004
+"""A lighter squeeze than the pick's (6 N holds a 0.3 kg box): the command then travels less to let go."""
+OPEN_REWARD = 15.0
+"""What the single cost pays for the gripper command fully open with the box set down on the goal."""
+FREED_REWARD = 4.0
+"""What the single cost pays for the box left on the goal with the fingers off it: more than the hand's
+rising term can cost at its lowest, so letting go never costs."""
+
+
 def pick_clutter_single(ctx: ContactContext) -> list[StageFactory]:
-    """One cost: the single-stage pick, with a carry-to-goal term and an open-when-set-down term once lifted."""
+    """One cost for the whole task, all its blends on the predicted state: the single-stage pick's hand terms
+    bring the fingers round the box and close them; the box is wanted at the carry height away from the goal
+    and on the table over it; once it is set down there the fingers open, and once they are free the hand
+    rises. (The former single cost switched the pick terms off on the measured height of the box: a stage
+    change in all but name.)"""
     cfg: PickClutterConfig = ctx.cfg  # type: ignore[assignment]
     goal = np.array(cfg.clutter.goal_m)
-    pick = pick_single(ctx, "box")
     rest = ctx.known.geometry["box"].rest_z
-    opening = cfg.effector.max_opening_m
+    up_z = ctx.known.geometry["box"].height + 0.05
 
     def make(obs: Observation) -> Stage:
-        base = pick(obs)
+        hand = grasp_terms(ctx, "box", obs, squeeze_m=PLACE_SQUEEZE_M)
+        start_to_goal = float(np.linalg.norm(obs.objects["box"].pos[:2] - goal))
 
         def cost(v: View) -> np.ndarray:
             box = v.pos("box")
-            lifted = step_up(box[..., 2] - rest, 0.03, 0.02)
+            reach, want_grip, held = hand(v)
             to_goal = norm(box[..., :2] - goal)
-            low_over_goal = step_up(-to_goal, -0.01, 0.008)
-            place = 20 * to_goal + 10 * np.abs(box[..., 2] - (rest + SET_DOWN_M + (1 - low_over_goal) * LIFT_M))
-            want_open = low_over_goal * opening
-            run = lifted * (place + 200 * (v.ctrl[..., 4] - want_open) ** 2) + W_SMOOTH * smoothness(v)
-            return base.cost(v) * (1 - float(obs.objects["box"].pos[2] > rest + 0.03)) + total(run)
+            over_goal = 1 - step_up(to_goal, (GOAL_IN_M + GOAL_OUT_M) / 2, (GOAL_OUT_M - GOAL_IN_M) / 2)
+            # the box is always drawn down to the table but kept above the carry height away from the goal: a
+            # height target that fell as the box neared the goal made nearing it cost (the box hung 2 cm off)
+            cone = (1 - over_goal) * CARRY_LIFT_M
+            lift = box[..., 2] - rest
+            # only a held box is moved toward the goal (no credit for shoving it across the table), with no
+            # penalty for not holding it yet: an unheld box counts as where it started
+            carry = (20 * (held * to_goal + (1 - held) * start_to_goal) + 50 * np.abs(lift)
+                     + 120 * np.maximum(0.0, cone - lift))
+            placed = over_goal * step_up(-lift, -SET_DOWN_LIFT_M, 0.004)
+            # after set-down, opening and rising earn rewards rather than staying shut costing more: a cost on a
+            # shut gripper that grew as the box neared the table held the box 13 mm above it
+            grip = (1 - placed) * 15 * np.abs(v.ctrl[..., 4] - want_grip)
+            # from fully shut, not from the squeeze target: the command sat below it, where a clipped one was flat
+            opened = np.clip(v.ctrl[..., 4] / hand.open_w, 0.0, 1.0)
+            freed = placed * (1 - held)
+            rise = 30 * np.maximum(0.0, up_z - v.tcp[..., 2])
+            release = -OPEN_REWARD * placed * opened + freed * (rise - FREED_REWARD)
+            run = ((1 - placed) * reach + carry + grip + release + yaw_error(v.yaw, hand.yaw) ** 2
+                   + W_SMOOTH * smoothness(v))
+            return total(run)
 
         def done(o: Observation) -> bool:
             b = o.objects["box"]
             return bool(np.linalg.norm(b.pos[:2] - goal) < 0.02 and b.pos[2] < rest + 0.004 and o.touch.max() < 0.1)
 
-        return Stage("pick-place", cost, done, timeout_s=cfg.control.episode_s, goal={"x_mm": goal[0] * 1000})
+        return Stage("pick-place", cost, done, timeout_s=cfg.control.episode_s, noise_scale=SINGLE_NOISE,
+                     goal={"x_mm": goal[0] * 1000, "y_mm": goal[1] * 1000})
 
     return [make]
