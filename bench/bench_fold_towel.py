@@ -19,9 +19,9 @@ Success rates with a Wilson CI come from `kintsugi bench fold-towel` (see the fi
 (e) `--grip`: the scripted fold (perceived corners, `pose`) at each squeeze in `--forces`: folded, and
     released (no pad touching the towel at the end). At the rigid tasks' 20 N the pads' edges press
     through the coarse cloth, whose corner triangles then stay wrapped round a pad when it opens and
-    ride up with it; the task's 8 N pinch holds the towel and lets it go.
+    ride up with it; the task's 6 N pinch holds the towel and lets it go.
 
-    .venv/bin/python bench/bench_fold_towel.py --grip [--forces 8 20] [--trials 10]
+    .venv/bin/python bench/bench_fold_towel.py --grip [--forces 6 20] [--trials 10]
 """
 
 from __future__ import annotations
@@ -132,7 +132,7 @@ def main() -> None:
     ap.add_argument("--inset", type=float, default=None, help="(d) grasp inset, m (default: the script's)")
     ap.add_argument("--tip", type=float, default=None, help="(d) fingertip clearance, m (default: the script's)")
     ap.add_argument("--grip", action="store_true", help="only (e): fold and release outcome per squeeze")
-    ap.add_argument("--forces", type=float, nargs="+", default=[8.0, 20.0], help="(e) squeezes, N")
+    ap.add_argument("--forces", type=float, nargs="+", default=[6.0, 20.0], help="(e) squeezes, N")
     args = ap.parse_args()
     load_all()
     if args.grip:

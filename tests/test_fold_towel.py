@@ -168,7 +168,7 @@ def test_drop_condition_releases_a_held_corner() -> None:
 
 
 def test_scripted_fold_with_perceived_corners_folds_and_lets_go() -> None:
-    """The whole scripted fold on a randomized pose from perceived corners: the pinch (8 N) lets the
+    """The whole scripted fold on a randomized pose from perceived corners: the pinch (6 N) lets the
     cloth go when the pads open (at 20 N the pads press through the coarse cloth and drag it off on
     the retreat), and the lifted half falls flat with its corners on the top ones."""
     task = _task()
