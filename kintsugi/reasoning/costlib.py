@@ -1,7 +1,8 @@
 """The embedded formulation backend: cost code composed from a library of cost terms.
 
 No lookup by task name. The instruction's words choose skills (pick / put down on / push
-against / press with N / flip over / pivot against) and the objects' geometry fills them in:
+against / press with N / flip over / pivot against / push over the table edge, then pick) and
+the objects' geometry fills them in:
 which object the words name, whether it stands tall or lies flat, which fixture or marker it
 goes to, which face to push on (the face turned away from the fixture), how high to grasp and
 which side fits the gripper. Every skill writes its stages as functions of the cost language
