@@ -40,6 +40,9 @@ TRAVEL_Z = 0.07
 GRASP_TOUCH_N = 5.0
 YAW_W = 30.0
 PUSH_SPEED = 0.05
+PUSH_TIMEOUT_S = 9.0
+"""The farthest start (8 cm from the edge) plus the 9.5 cm overhang is 17 cm at PUSH_SPEED behind a lagging
+servo; 6 s ran out on the two farthest starts of ten."""
 PUSH_LEAD_M = 0.004
 """How far ahead of the contact point the pushing TCP aims (a few newtons through the servo)."""
 
@@ -144,7 +147,7 @@ def push_pick_board_fsm(ctx: ContactContext) -> list[StageFactory]:
             return bool(overhang(b.pos, b.quat, geo, edge) >= target - PUSH_MARGIN_M / 2
                         and np.linalg.norm(b.lin_vel) < 0.01)
 
-        return Stage("push", lambda v: total(push(v, y0, yaw0)), done, grip=0.0, hold_s=0.2, timeout_s=6.0,
+        return Stage("push", lambda v: total(push(v, y0, yaw0)), done, grip=0.0, hold_s=0.2, timeout_s=PUSH_TIMEOUT_S,
                      attractors=(attract,), goal={"overhang_mm": target * 1000})
 
     def back_off(obs: Observation) -> Stage:
