@@ -29,6 +29,7 @@ from kintsugi.config import StrictModel
 from kintsugi.errors import KintsugiError
 from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes
 from kintsugi.methods.agentchord.observe import ARMS, features
+from kintsugi.methods.agentchord.synthesis import EdgeSynthesis
 from kintsugi.methods.agentchord.tops import Heads, Tops
 from kintsugi.taskgraph.features import Features
 from kintsugi.taskgraph.forward import cost_to_go, guarded_next_edge, next_edge
@@ -45,12 +46,6 @@ SETTLE_DEG = 0.2
 SETTLE_READS = 2
 """Consecutive still pairs required (one pair can alias with a rocking object's period)."""
 SETTLE_TRIES = 25
-
-
-GRASP_Z_MIN_M = 0.029
-"""A top-down grasp point is no lower than this (the pads' half length plus the table clearance)."""
-UPRIGHT_SWINGS_DEG = (0.0, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0)
-"""Standing a held object up: the hand faces away from the shoulder, or swung this far about the vertical."""
 
 
 class ConductorError(KintsugiError):
@@ -121,12 +116,8 @@ class Conductor:
         self.after_action: Callable[[Edge, int], bool] | None = None
         """Optional check after each atomic action (edge, index) -> failed? (the re-planning baselines' verifier)."""
         self.ctg = cost_to_go(graph)
-        self.tops = tops if tops is not None else Tops()
-        """Which end of each object is its top (for standing a fallen object up the right way round)."""
-        self.heads = Heads()
-        self.missed: dict[tuple[str, str], int] = {}
-        """(arm, object) -> grasps in a row that closed on nothing (see `_grasp_outcome`)."""
-        """Which way each lying utensil's head points (for turning it to an absolute heading); `seed` it."""
+        self.synthesis = EdgeSynthesis(graph, robot, keyframes, tops if tops is not None else Tops(), Heads())
+        self.tops, self.heads = self.synthesis.tops, self.synthesis.heads
         self.arms = {a.args.get("arm") for e in graph.edges for a in e.actions if isinstance(a.args.get("arm"), str)}
 
     # --- running ------------------------------------------------------------------
@@ -356,20 +347,13 @@ class Conductor:
         call = {"action": name, **args}
         if name == "move_to_obj" and len(edge.actions) == 1:
             call = self._keyframe_call(edge, call)
-        if name == "rotate_eef" and call.get("axis") == "closing" and self._wants_upright(edge):
-            call = self._upright_call(call)
-        if name == "drive":
-            call = self._carry_call(edge, call)
-        if name == "rotate_eef" and call.get("axis") == "approach":
-            call = self._heading_call(edge, call)
-        if name == "grasp" and call.get("yaw_deg") is None and call.get("grasp_offset") is None:
-            call = self._grasp_call(call)
+        call = self.synthesis.adapt(edge, call)
         if self.metrics.fired_at is not None:  # the first command after a firing: detection -> recovery
             self.metrics.recovery_latency_steps.append(self.robot_steps() - self.metrics.fired_at)
             self.metrics.fired_at = None
         result = self.robot.execute(call)
         if name == "grasp" and isinstance(call.get("obj"), str):
-            self._grasp_outcome(call)
+            self.synthesis.grasp_outcome(call)
         arm_states = {a: self.robot.arm_state(a) for a in ARMS}
         self.tops.follow(arm_states)
         self.heads.follow(arm_states)
@@ -388,138 +372,6 @@ class Conductor:
                      f"[/bold] -> {flag} ({escape(result.message)})", markup=True)
         if result.ik_failed:
             raise KeyframeError(f"{edge.id} {name}: {result.message}")
-
-    def _wants_upright(self, edge: Edge) -> bool:
-        return any(c.kind == "upright" for c in self.graph.node(edge.target).constraints)
-
-    def _upright_call(self, call: dict) -> dict:
-        """Edge synthesis (Eq. 10) of a turn toward an upright sub-goal: the hand orientation that puts the held
-        object's known top up, level and facing away from the shoulder; as given when nothing held has a top."""
-        from scipy.spatial.transform import Rotation
-
-        from kintsugi.methods.agentchord.tops import hand_rotation
-
-        arm = call["arm"]
-        state = self.robot.arm_state(arm)
-        ik, pos, rot = self.keyframes.iks[arm], np.array(state.tcp_pos), hand_rotation(state)
-        turn = None
-        for swing in UPRIGHT_SWINGS_DEG:  # the first facing the arm reaches (its IK, checked before moving)
-            turn = self.tops.upright_turn(arm, state, self.keyframes.shoulders[arm], swing)
-            if turn is None:
-                return call
-            if ik.solve(pos, turn @ rot, np.radians(state.joints_deg)).ok:
-                break
-        rpy = Rotation.from_matrix(turn).as_euler("xyz", degrees=True)
-        return {"action": "move_by_offset", "arm": arm, "dxyz": (0.0, 0.0, 0.0), "frame": "world",
-                "drpy_deg": tuple(round(float(v), 3) for v in rpy)}
-
-    def _heading_call(self, edge: Edge, call: dict) -> dict:
-        """Edge synthesis (Eq. 10) of a turn toward a `heading` sub-goal: the absolute turn about the vertical
-        that brings the held object's tracked head (`Heads`) to the sub-goal's yaw. The compiled angle was
-        relative to the first observation: wrong for an object re-grasped after it fell mid-turn."""
-        from kintsugi.methods.agentchord.tops import hand_rotation, held_by
-        from kintsugi.taskgraph.constraints import wrap_deg
-
-        state = self.robot.arm_state(call["arm"])
-        goal = next(((c.object, c.yaw_deg) for c in self.graph.node(edge.target).constraints
-                     if c.kind == "heading" and c.object in held_by(state)), None)
-        if goal is None or hand_rotation(state)[2, 2] > -0.9:  # a hand pointing down turns it about the vertical
-            return call
-        yaw = self.heads.yaw_deg(goal[0])
-        if yaw is None:
-            return call
-        # A hand pointing down turns what it holds by minus its own turn about the approach axis (the move
-        # slerps the short way, so this is the whole choice).
-        return {**call, "angle_deg": round(wrap_deg(yaw - goal[1]), 3)}
-
-    def _grasp_call(self, call: dict) -> dict:
-        """Edge synthesis (Eq. 10) of a top-down grasp on a utensil that must end at a heading: of the two hand
-        yaws that close across it, the one whose hand, once the utensil is turned to its heading, faces nearest
-        the way the arm points at the region (the grasp's own default picks by where it lies now; a utensil
-        fallen the other way round then needs a wrist turn the arm does not reach over the region). Kept only
-        when the arm reaches that grasp (IK checked before moving)."""
-        from scipy.spatial.transform import Rotation
-
-        from kintsugi.taskgraph.constraints import wrap_deg
-
-        arm, obj = call["arm"], call["obj"]
-        misses = self.missed.get((arm, obj), 0)
-        if misses % 2 == 1:  # the chosen yaw missed: the default next (and the chosen one again after that)
-            return call
-        psi, centre = self._heading_goal(obj), self._region_of(obj)
-        head = self.heads.yaw_deg(obj)
-        seen = self.robot.features({obj})[obj]
-        if psi is None or centre is None or head is None or not seen.visible or seen.centroid is None:
-            return call
-        shoulder = np.asarray(self.keyframes.shoulders[arm], dtype=float)
-        radial = np.degrees(np.arctan2(centre[1] - shoulder[1], centre[0] - shoulder[0]))
-        final = min((psi, psi + 180.0), key=lambda y: abs(wrap_deg(y - radial)))
-        yaw = wrap_deg(head + final - psi)
-        c = np.array(seen.centroid, dtype=float)
-        c[2] = max(c[2], GRASP_Z_MIN_M)
-        rot = Rotation.from_euler("ZY", [np.radians(yaw), np.pi]).as_matrix()
-        state = self.robot.arm_state(arm)
-        if not self.keyframes.iks[arm].solve(c, rot, np.radians(state.joints_deg)).ok:
-            return call
-        return {**call, "yaw_deg": round(float(yaw), 3)}
-
-    def _grasp_outcome(self, call: dict) -> None:
-        """Count grasps that closed on nothing in a row: the next one is tried the other way (chosen yaw <->
-        default), so a recovery that re-runs it does not repeat the same miss."""
-        key = (call["arm"], call["obj"])
-        if call["obj"] in self.robot.grip_sense(call["arm"]).touching:
-            self.missed.pop(key, None)
-        else:
-            self.missed[key] = self.missed.get(key, 0) + 1
-
-    def _heading_goal(self, obj: str) -> float | None:
-        return next((c.yaw_deg for n in self.graph.nodes for c in n.constraints
-                     if c.kind == "heading" and c.object == obj), None)
-
-    def _region_of(self, obj: str) -> tuple[float, float] | None:
-        """The centre (x, y) of a region some sub-goal puts the object's centroid in."""
-        for n in self.graph.nodes:
-            for c in n.constraints:
-                if (c.kind == "in_region" and c.point.entity == obj and c.point.feature is None
-                        and c.hi[0] - c.lo[0] < 1.0):
-                    return (c.lo[0] + c.hi[0]) / 2.0, (c.lo[1] + c.hi[1]) / 2.0
-        return None
-
-    def _carry_call(self, edge: Edge, call: dict) -> dict:
-        """Edge synthesis (Eq. 10) of a two-arm carry toward a region sub-goal: the same horizontal shift for
-        both hands, from the held object's centroid perceived now to the region's centre. The compiled shift
-        came from the first observation, and a recovery re-grasps the object wherever it fell."""
-        inner = [call[a] for a in ARMS if isinstance(call.get(a), dict)]
-        shifts = {tuple(i.get("dxyz", ())) for i in inner}
-        if (len(inner) < 2 or any(i.get("action") != "move_by_offset" or i.get("frame", "world") != "world"
-                                  for i in inner) or len(shifts) != 1):
-            return call
-        dxyz = next(iter(shifts))
-        if len(dxyz) != 3 or abs(dxyz[0]) + abs(dxyz[1]) < 1e-9:
-            return call
-        goal = self._region_goal(edge, {a["arm"] for a in inner})
-        if goal is None:
-            return call
-        obj, centre = goal
-        seen = self.robot.features({obj})[obj]
-        if not seen.visible or seen.centroid is None:
-            return call
-        shift = [round(float(centre[0] - seen.centroid[0]), 4), round(float(centre[1] - seen.centroid[1]), 4), dxyz[2]]
-        return {**call, **{i["arm"]: {**i, "dxyz": shift} for i in inner}}
-
-    def _region_goal(self, edge: Edge, arms: set[str]) -> tuple[str, tuple[float, float]] | None:
-        """(object, region centre x-y) of an `in_region` constraint of the edge's target on the centroid of an
-        object every one of `arms` holds now (both pads touching)."""
-        held = None
-        for arm in arms:
-            now = {k for k, n in self.robot.arm_state(arm).touching.items() if n == 2}
-            held = now if held is None else held & now
-        for c in self.graph.node(edge.target).constraints:
-            if c.kind != "in_region" or c.point.feature is not None or c.point.along is not None:
-                continue
-            if c.point.entity in (held or set()):
-                return c.point.entity, ((c.lo[0] + c.hi[0]) / 2.0, (c.lo[1] + c.hi[1]) / 2.0)
-        return None
 
     def _keyframe_call(self, edge: Edge, call: dict) -> dict:
         arm = call["arm"]
