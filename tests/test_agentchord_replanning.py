@@ -54,3 +54,43 @@ def test_a_drop_makes_the_reasoner_plan_again(method: str) -> None:
     roles = [c["role"] for c in r.transcript]
     assert roles.count("composer") == 2 and m.runtime_reasoning_calls > 1
     assert m.modelled_execution_time_s == pytest.approx(r.sim_time + 5.0 * len(roles), abs=1e-3)
+
+
+def _lying_bottle_request(first: bool):
+    """The pour scene re-observed after the bottle fell over (lying on the table, free), optionally with the
+    task's first observation (the bottle standing) carried as a re-planning composer would remember it."""
+    from kintsugi.methods.agentchord.domain import TABLETOP_DOMAIN
+    from kintsugi.reasoning.taskgraph_types import ComposerRequest, SeenObject
+    from tests.taskgraph_fixtures import POUR_GOAL, POUR_TEXT
+
+    before, _ = seen_scene()
+    now, arms = seen_scene()
+    now[0] = SeenObject(name="bottle", visible=True, centroid=(0.42, -0.24, 0.03), top_z=0.06, bottom_z=0.0,
+                        tilt_deg=89.0, upright=False, extent=(0.2, 0.06, 0.06))
+    return ComposerRequest(task=POUR_TEXT, goal=POUR_GOAL, objects=now, arms=arms, domain=TABLETOP_DOMAIN,
+                           first_objects=before if first else [])
+
+
+def test_a_replan_remembers_the_first_observations_static_facts() -> None:
+    """A lying bottle does not show that it stands; re-planning from the current view alone finds upright(bottle)
+    never achievable. Given the first observation (as a model that planned the task remembers the scene), the
+    composer knows the bottle stands and plans to stand it up. Only static facts carry over: the bottle is not
+    believed upright now."""
+    from kintsugi.reasoning.composer import embedded_compose
+    from kintsugi.reasoning.symbolic import PlanningError
+
+    with pytest.raises(PlanningError, match=r"never achievable: .*upright\(bottle\)"):
+        embedded_compose(_lying_bottle_request(first=False))
+    reply = embedded_compose(_lying_bottle_request(first=True))
+    start = set(reply.node_facts["start"])
+    assert "stands(bottle)" in start and "upright(bottle)" not in start
+    assert list(reply.edge_operators.values())[0] == "stand_up(right, bottle)"
+
+
+def test_a_baseline_replans_a_fallen_bottle_with_what_it_saw_first() -> None:
+    r = run_trial(TrialSpec(task="pour-dual", method="inner-monologue", variant="default", condition="drop",
+                            seed=0, overrides={"disturbance.drop_p": 0.1}))  # seed 0: the bottle drops and lies
+    assert r.error is None
+    composers = [c for c in r.transcript if c["role"] == "composer"]
+    assert len(composers) >= 2 and not composers[0]["request"].get("first_objects")
+    assert all(c["request"]["first_objects"] for c in composers[1:])

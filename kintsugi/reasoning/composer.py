@@ -77,6 +77,21 @@ def observed_facts(request: Any, domain: Domain, places: list[str] = ()) -> Stat
     return frozenset(facts)
 
 
+def remembered_facts(request: Any, domain: Domain) -> State:
+    """The domain's static facts (`PredicateSpec.static`: shape and size, not pose) that the task's first
+    observation showed about the objects still in the scene, when a re-planning request carries it: a bottle seen
+    standing still `stands` after it fell over, though its lying view does not show it."""
+    from types import SimpleNamespace
+
+    first = getattr(request, "first_objects", None)
+    if not first:
+        return frozenset()
+    static = {p.name for p in domain.predicates if p.static}
+    now = {o.name for o in request.objects}
+    seen = SimpleNamespace(arms=[], objects=[o for o in first if o.name in now])
+    return frozenset(a for a in observed_facts(seen, domain) if a[0] in static)
+
+
 def looks_flat(o: SeenObject) -> bool:
     if o.top_z is None or o.bottom_z is None or o.extent is None:
         return False
@@ -381,7 +396,7 @@ def embedded_compose(request: ComposerRequest) -> ComposerReply:
     names = [o.name for o in request.objects if o.visible]
     places = goal_places(list(request.goal), [a.name for a in request.arms], [o.name for o in request.objects])
     where = place_table(places, domain, seen, dict(request.regions))
-    initial = observed_facts(request, domain, places)
+    initial = observed_facts(request, domain, places) | remembered_facts(request, domain)
     goal = parse_literals(list(request.goal), domain, where="task goal")
     ops = instructed_ops(request.task, domain, arms, names, places)
     steps = plan(initial, goal, ops)

@@ -57,6 +57,9 @@ class PredicateSpec(StrictModel):
     """Constraint templates (kintsugi.taskgraph.constraints) with `?1`, `?2` for the arguments."""
     gripper: Literal["open", "closed"] | None = None
     """For an (arm, ...) predicate: the gripper state it implies for that arm."""
+    static: bool = False
+    """A property of the thing itself (its shape, its size), not of where it is or who holds it: what the first
+    observation showed still holds later, when the view no longer shows it (a fallen bottle still stands)."""
 
 
 class OperatorSpec(StrictModel):
@@ -140,6 +143,12 @@ class ComposerRequest(StrictModel):
     goals such as `in_region(block, target)`; regions relative to an object (`beside_left(plate)`) are
     computed from its perceived centroid instead."""
     images_png: dict[str, bytes] = Field(default_factory=dict, repr=False)
+    first_objects: list[SeenObject] = Field(default_factory=list, max_length=32)
+    """Re-planning mid-task: the objects as perceived in the task's first observation (empty on the first plan).
+    The domain's `static` facts it showed still hold though the current view may not show them (a bottle seen
+    standing, now lying, still stands); a model that planned the task first has seen that scene too."""
+    first_images_png: dict[str, bytes] = Field(default_factory=dict, repr=False)
+    """Re-planning: the first observation's camera images (with a model backend)."""
 
     @field_validator("goal")
     @classmethod

@@ -51,8 +51,10 @@ def task_regions(spec: Any, cfg: Any) -> dict[str, tuple[float, float]]:
 
 
 def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = True,
-                  goal: list[str] | None = None, cfg: Any = None) -> Compiled:
-    """spec: the task's TaskSpec (instruction, goal, objects); observation: the robot's first Observation.
+                  goal: list[str] | None = None, cfg: Any = None, first: Any = None) -> Compiled:
+    """spec: the task's TaskSpec (instruction, goal, objects); observation: the robot's first Observation, or
+    the current one when re-planning mid-task, with `first` the task's first Observation (what the composer
+    remembers of the scene: its static facts, and its images for a model).
     Raises ReasoningError (recorded in the transcript when the reasoner records) when a role fails.
     With `arranger=False` (ReKep-style) there is one planning call: the monitors are the nominal graph's own
     constraints that must persist along each edge (detect-only), no recovery branches."""
@@ -62,7 +64,9 @@ def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = T
     try:
         request = ComposerRequest(task=spec.instruction, goal=list(spec.goal if goal is None else goal),
                                   objects=objects, arms=arms, regions=task_regions(spec, cfg),
-                                  domain=TABLETOP_DOMAIN, images_png=dict(observation.images_png))
+                                  domain=TABLETOP_DOMAIN, images_png=dict(observation.images_png),
+                                  first_objects=seen_objects(first.objects) if first is not None else [],
+                                  first_images_png=dict(first.images_png) if first is not None else {})
     except ValidationError as exc:
         raise PlanningError(f"task {spec.name!r} cannot be composed: {describe_validation_error(exc)}") from None
     nominal, composed = ask_compose(reasoner, request, vocab)

@@ -47,9 +47,9 @@ REGION_TOL_M = 0.04
 """A sub-goal `in_region` holds when the perceived centroid is this close (x and y) to the region's centre."""
 
 
-def _p(name, params, meaning, constraints=(), gripper=None) -> PredicateSpec:  # noqa: ANN001
+def _p(name, params, meaning, constraints=(), gripper=None, static=False) -> PredicateSpec:  # noqa: ANN001
     return PredicateSpec(name=name, params=list(params), meaning=meaning, constraints=list(constraints),
-                         gripper=gripper)
+                         gripper=gripper, static=static)
 
 
 PREDICATES = [
@@ -72,10 +72,11 @@ PREDICATES = [
     _p("released", ["object"], "no arm holds the object"),
     _p("flat", ["object"], "the object lies flat (it is no taller than it is wide), on the table or level in the hand"),
     _p("stands", ["object"], "the object has a base it stands on: it was seen standing with a clear axis (a bottle, "
-       "a cup; not a cube or a fork), so it can fall over and be stood back up (static)"),
-    _p("narrow", ["object"], "the object fits between one gripper's open fingers (static, from its perceived size)"),
-    _p("region", ["place"], "the place is a region of the table (static)"),
-    _p("direction", ["place"], "the place is a direction a heading goal may name (static)"),
+       "a cup; not a cube or a fork), so it can fall over and be stood back up (static)", static=True),
+    _p("narrow", ["object"], "the object fits between one gripper's open fingers (static, from its perceived size)",
+       static=True),
+    _p("region", ["place"], "the place is a region of the table (static)", static=True),
+    _p("direction", ["place"], "the place is a direction a heading goal may name (static)", static=True),
     _p("over_place", ["object", "place"], "the held object is carried above the region"),
     _p("in_region", ["object", "place"], "the object's centre lies in the region",
        [{"kind": "in_region", "point": {"entity": "?1"}, "lo": [f"$rx(?2, -{REGION_TOL_M})", f"$ry(?2, -{REGION_TOL_M})",

@@ -7,8 +7,10 @@
 - `code-as-monitor`: the arranger's monitors, compiled once and detect-only; the verifier at every sub-goal;
   re-plan on a firing or a failed check.
 Execution is the same conductor as AgentChord's (keyframes, settle before re-perceiving), so the methods
-differ only in how failures are found and handled. Re-planning sees only the observation: the embedded
-composer plans from the facts it reads off it (a pour already done is not visible, so it is poured again).
+differ only in how failures are found and handled. Re-planning sees the current observation and the task's
+first one (as a model that planned the task remembers it): the embedded composer plans from the facts it reads
+off the current one plus the static facts of the first (a bottle seen standing still stands once it lies);
+history it verified is kept (a pour already done is not visible otherwise).
 """
 
 from __future__ import annotations
@@ -91,10 +93,14 @@ class Replanning:
             log.transcript.extend(r.model_dump(mode="json") for r in self.reasoner.records)
 
     def _plan(self, first: bool) -> tuple[TaskGraph, Any]:
+        """A re-plan sees the current observation and remembers the first (a model that planned the task saw
+        it): its static facts, e.g. that a bottle now lying stands, so standing it up is a plan."""
         obs = self.robot.observation(images=self.images)
+        if first:
+            self.first_obs = obs
         goal = [g for g in self.ctx.task.goal if g not in self.done] or None
         compiled = compile_graph(self.reasoner, self.ctx.task, obs, arranger=self.style == "code-as-monitor",
-                                 goal=goal, cfg=self.ctx.cfg)
+                                 goal=goal, cfg=self.ctx.cfg, first=None if first else self.first_obs)
         graph = compiled.graph
         if self.style == "code-as-monitor":  # detect only: the reasoner is asked again instead of a branch
             graph = TaskGraph.from_data({**graph.model_dump(), "nodes": [n.model_dump() for n in graph.nodes
