@@ -201,7 +201,7 @@ def _branch(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: Failure
     into one guarded chain per outcome. `releases`: the edge opens the hand on purpose (watch up to then)."""
     tag = f"{edge.id}.{mode.name}.{arm}"
     check = mode.check(arm, obj)
-    if releases:
+    if releases and check.get("kind") == "touching":  # a closed-on-nothing check reads an open hand as fine
         check = {**check, "while_closed": True}
     outs = outcomes(mode, u, arm, obj)
     if len(outs) == 1:

@@ -104,7 +104,7 @@ class Conductor:
     def __init__(self, graph: TaskGraph, robot: Any, keyframes: TabletopKeyframes, log: TrialLog,
                  steps_per_tick: int, compiled_keyframes: dict[str, np.ndarray] | None = None,
                  config: ConductorConfig = ConductorConfig(), metrics: Metrics | None = None,
-                 tops: Tops | None = None) -> None:
+                 tops: Tops | None = None, heads: Heads | None = None) -> None:
         self.graph = graph
         self.robot = robot
         self.keyframes = keyframes
@@ -116,7 +116,8 @@ class Conductor:
         self.after_action: Callable[[Edge, int], bool] | None = None
         """Optional check after each atomic action (edge, index) -> failed? (the re-planning baselines' verifier)."""
         self.ctg = cost_to_go(graph)
-        self.synthesis = EdgeSynthesis(graph, robot, keyframes, tops if tops is not None else Tops(), Heads())
+        self.synthesis = EdgeSynthesis(graph, robot, keyframes, tops if tops is not None else Tops(),
+                                       heads if heads is not None else Heads())
         self.tops, self.heads = self.synthesis.tops, self.synthesis.heads
         self.arms = {a.args.get("arm") for e in graph.edges for a in e.actions if isinstance(a.args.get("arm"), str)}
 

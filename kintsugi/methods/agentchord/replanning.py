@@ -24,6 +24,7 @@ from kintsugi.methods.agentchord.conductor import Conductor, ConductorConfig, Me
 from kintsugi.methods.agentchord.keyframes import TabletopKeyframes
 from kintsugi.methods.agentchord.method import LATENCY_MODEL_S, RunFigures
 from kintsugi.methods.agentchord.observe import seen_arms, seen_objects
+from kintsugi.methods.agentchord.tops import Heads, Tops
 from kintsugi.reasoning.composer import GoalHolds
 from kintsugi.reasoning.taskgraph_types import VerifyRequest
 from kintsugi.reasoning.verifier import ask_verify
@@ -53,6 +54,10 @@ class Replanning:
         steps_per_tick = max(1, round(cfg.sim.control_dt_s / cfg.sim.timestep_s))
         keyframes = TabletopKeyframes(cfg)
         metrics = Metrics()
+        self.tops, self.heads = Tops(), Heads()
+        """The robot's own memory of which end of each object is its top and which way a utensil's head points
+        (encoders while held, continuity while it falls), kept across re-plans as AgentChord keeps it for the
+        whole trial: execution is the same, only how failures are found and handled differs."""
         planning_calls = 0
         try:
             ok = False
@@ -73,7 +78,7 @@ class Replanning:
                     self.paths.setdefault(proposal.edge, []).append(proposal)
                 conductor = Conductor(graph, robot, keyframes, log, steps_per_tick,
                                       config=ConductorConfig(on_failure="backtrack", max_recoveries=0),
-                                      metrics=metrics)
+                                      metrics=metrics, tops=self.tops, heads=self.heads)
                 conductor.after_action = self._after_action(graph) if self.style == "doremi" else None
                 ok, failed = self._conduct(conductor, graph)
                 if not failed:
@@ -98,6 +103,8 @@ class Replanning:
         obs = self.robot.observation(images=self.images)
         if first:
             self.first_obs = obs
+            self.tops.observe(obs.objects)
+            self.heads.seed(obs.objects)
         goal = [g for g in self.ctx.task.goal if g not in self.done] or None
         compiled = compile_graph(self.reasoner, self.ctx.task, obs, arranger=self.style == "code-as-monitor",
                                  goal=goal, cfg=self.ctx.cfg, first=None if first else self.first_obs)
