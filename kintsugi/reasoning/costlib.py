@@ -10,7 +10,8 @@ which side fits the gripper. Every skill writes its stages as functions of the c
 before MPPI sees it. The code reads sizes and poses through variables (`box_half`,
 `start_box_pos`, ...), never as baked numbers, so a stored episode's code fits a new trial
 with a differently sized box. `knobs` are the weights and thresholds the code is written with;
-the adaptation role refines them and the library writes the code again.
+the adaptation role refines them and the library writes the code again. Moves to a known pose also give
+their goal as `<cost>_seed_<axis>` functions: the plan restarts there (see kintsugi.methods.coral.stages).
 """
 
 from __future__ import annotations
@@ -184,13 +185,25 @@ def _t(k: dict[str, float], s: float) -> float:
 
 
 def _hold_code(name: str, dx: str = "0.0", dy: str = "0.0", dz: str = "0.0", yaw: str = "start_yaw",
-               extra: str = "") -> str:
-    """A cost holding the TCP at start_tcp + (dx, dy, dz) with a yaw."""
-    return f'''def {name}(tcp, yaw, step_change, start_tcp, start_yaw{extra}):
+               extra: str = "", w_yaw: str = "W_YAW", seed: bool = False) -> str:
+    """A cost holding the TCP at start_tcp + (dx, dy, dz) with a yaw; with `seed`, the plan restarts there."""
+    code = f'''def {name}(tcp, yaw, step_change, start_tcp, start_yaw{extra}):
     ex = tcp[..., 0] - start_tcp[0] - {dx}
     ey = tcp[..., 1] - start_tcp[1] - {dy}
     ez = tcp[..., 2] - start_tcp[2] - {dz}
-    return W_REACH * sqrt(ex ** 2 + ey ** 2 + ez ** 2) + W_YAW * wrap_pi(yaw - {yaw}) ** 2 + W_SMOOTH * step_change'''
+    return W_REACH * sqrt(ex ** 2 + ey ** 2 + ez ** 2) + {w_yaw} * wrap_pi(yaw - {yaw}) ** 2 + W_SMOOTH * step_change'''
+    if seed:
+        code += "\n\n\n" + _seed_code(name, "start_tcp, start_yaw", f"start_tcp[0] + {dx}", f"start_tcp[1] + {dy}",
+                                        f"start_tcp[2] + {dz}", yaw)
+    return code
+
+
+def _seed_code(cost: str, params: str, x: str, y: str, z: str, yaw: str | None = None) -> str:
+    """The stage's goal as the commands its plan restarts from (`<cost>_seed_<axis>`, read at stage entry):
+    the servos head straight for it and MPPI refines from there, instead of crawling from the last plan."""
+    axes = [("x", x), ("y", y), ("z", z)] + ([("yaw", yaw)] if yaw is not None else [])
+    return "\n\n\n".join(f'''def {cost}_seed_{a}({params}):
+    return {v}''' for a, v in axes)
 
 
 def _sub(code: str, k: dict[str, float]) -> str:
@@ -584,7 +597,8 @@ def edge_push_cost(tcp, yaw, step_change, {p}, {n}_hi, {n}_pos, {n}_vel, start_{
 
 def edge_push_done({n}_hi, {n}_vel, table_edge_x):
     return logical_and(overhang({n}_hi, table_edge_x) > {k["overhang_m"] - 0.005}, norm({n}_vel) < 0.01)''', k))
-    plan.code.append(_sub(_hold_code("back_off_cost", dx="-0.03", dz=f"({k['travel_z_m']} - start_tcp[2])", yaw="0.0"), k))
+    plan.code.append(_sub(_hold_code("back_off_cost", dx="-0.03", dz=f"({k['travel_z_m']} - start_tcp[2])", yaw="0.0",
+                                     seed=True), k))
     plan.code.append(f'''def back_off_done(tcp, start_tcp):
     ex = tcp[..., 0] - start_tcp[0] + 0.03
     ey = tcp[..., 1] - start_tcp[1]
@@ -593,7 +607,7 @@ def edge_push_done({n}_hi, {n}_vel, table_edge_x):
     plan.stages += [
         StageSpec(name="approach", cost="approach_cost", done="approach_done", grip="closed", timeout_s=_t(k, 4.0)),
         StageSpec(name="push", cost="edge_push_cost", done="edge_push_done", grip="closed", region=region, hold_s=0.2,
-                  timeout_s=_t(k, 6.0)),
+                  timeout_s=_t(k, 9.0)),
         StageSpec(name="back-off", cost="back_off_cost", done="back_off_done", grip="closed", timeout_s=_t(k, 3.0)),
     ]
     where = "low on its back face" if contact else "(no contact region)"
@@ -627,6 +641,22 @@ def over_end_done(tcp, yaw, start_{n}_pos, start_{n}_yaw, table_edge_x):
     return logical_and(sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.01, abs(wrap_pi(yaw - start_{n}_yaw)) < 0.05)
 
 
+def over_end_cost_seed_x(table_edge_x):
+    return table_edge_x + {past}
+
+
+def over_end_cost_seed_y(start_{n}_pos, start_{n}_yaw, table_edge_x):
+    return pinch_y(start_{n}_pos, start_{n}_yaw, table_edge_x)
+
+
+def over_end_cost_seed_z(start_tcp):
+    return {travel} + 0.0 * start_tcp[2]
+
+
+def over_end_cost_seed_yaw(start_{n}_yaw):
+    return start_{n}_yaw
+
+
 def under_cost(tcp, yaw, step_change, start_tcp, start_yaw):
     """Straight down past the edge until the fingertips are below the object's underside."""
     ex = tcp[..., 0] - start_tcp[0]
@@ -636,12 +666,24 @@ def under_cost(tcp, yaw, step_change, start_tcp, start_yaw):
     return W_REACH * sqrt(exy ** 2 + ez ** 2) + 2.0 * W_REACH * exy + 30.0 * wrap_pi(yaw - start_yaw) ** 2 + W_SMOOTH * step_change
 
 
+def under_cost_seed_x(start_tcp):
+    return start_tcp[0]
+
+
+def under_cost_seed_y(start_tcp):
+    return start_tcp[1]
+
+
+def under_cost_seed_z(start_tcp):
+    return {under} + 0.0 * start_tcp[2]
+
+
 def under_done(tcp, start_tcp):
     ex = tcp[..., 0] - start_tcp[0]
     ey = tcp[..., 1] - start_tcp[1]
     ez = tcp[..., 2] - ({under})
     return sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.006''', k))
-    plan.code.append(_sub(_hold_code("pinch_cost"), k))
+    plan.code.append(_sub(_hold_code("pinch_cost", w_yaw="30.0"), k))
     plan.code.append(f'''def pinch_done(touch):
     return min(touch, axis=-1) > {k["edge_touch_n"]}''')
     plan.code.append(_sub(f'''def lift_end_cost(tcp, yaw, step_change, start_tcp, start_yaw, {n}_pos, start_{n}_pos):
@@ -653,12 +695,24 @@ def under_done(tcp, start_tcp):
     return W_REACH * sqrt(ex ** 2 + ey ** 2 + ez ** 2) + W_REACH * lag + 30.0 * wrap_pi(yaw - start_yaw) ** 2 + W_SMOOTH * step_change
 
 
+def lift_end_cost_seed_x(start_tcp):
+    return start_tcp[0] - 0.03
+
+
+def lift_end_cost_seed_y(start_tcp):
+    return start_tcp[1]
+
+
+def lift_end_cost_seed_z(start_tcp):
+    return {k["edge_lift_z_m"]} + 0.0 * start_tcp[2]
+
+
 def lift_end_done(tcp, touch, start_tcp):
     ex = tcp[..., 0] - start_tcp[0] + 0.03
     ey = tcp[..., 1] - start_tcp[1]
     ez = tcp[..., 2] - {k["edge_lift_z_m"]}
     return logical_and(sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.015, min(touch, axis=-1) > 1.0)''', k))
-    plan.code.append(_sub(_hold_code("still_cost"), k))
+    plan.code.append(_sub(_hold_code("still_cost", w_yaw="30.0", seed=True), k))
     plan.code.append(f'''def still_done({n}_vel, {n}_spin):
     return logical_and(norm({n}_vel) < 0.015, {n}_spin < 0.2)''')
     plan.stages += [

@@ -4,6 +4,11 @@ Each stage's cost calls the compiled program on the rollout batch (lazy variable
 transition calls the `done` function on the measured state. A cost that returns NaN or inf
 for a sample gives that sample no weight; a function that fails at run time ends the attempt
 with a `CostCodeError` the method records (the probe makes that rare, never silent).
+
+A stage whose cost function `c` has companions `c_seed_x`, `c_seed_y`, `c_seed_z` or `c_seed_yaw`
+in the code (functions of the state at stage entry, one number each) restarts its plan's commands
+on those axes from their values: MPPI refines from the stage's own goal instead of crawling there
+from the previous stage's plan (the warm start the expert FSM gives its stages).
 """
 
 from __future__ import annotations
@@ -97,7 +102,8 @@ def _factory(spec: StageSpec, reply: FormulationReply, program: CostProgram, sce
 
         return Stage(name=spec.name, cost=cost, done=done, grip=_grip(spec, program, obs, scene, env0, cfg),
                      timeout_s=spec.timeout_s, hold_s=spec.hold_s, feedback=_feedback(spec, cfg),
-                     attractors=(attractor,) if attractor else (), seed_plan=_preload(spec, obs, cfg),
+                     attractors=(attractor,) if attractor else (),
+                     seed_plan={**_seed(spec, program, obs, scene, env0), **_preload(spec, obs, cfg)},
                      noise_scale=spec.noise_scale, goal=_goal(spec))
 
     return make
@@ -136,6 +142,32 @@ def _feedback(spec: StageSpec, cfg):  # noqa: ANN001, ANN202
         return force_feedback(planned, obs.force[axis:axis + 1], np.array([target]), fb)
 
     return apply
+
+
+SEED_AXES = {"x": 0, "y": 1, "z": 2, "yaw": 3}
+"""`<cost>_seed_<axis>` -> the actuator whose planned command it restarts."""
+
+
+def _seed(spec: StageSpec, program: CostProgram, obs: Observation, scene: Scene, env0: dict) -> dict[int, float]:
+    """The commands a stage's plan restarts from: for each axis whose `<cost>_seed_<axis>` function the code
+    defines (x, y, z of the TCP in m, yaw in rad), that function's value at stage entry.
+
+    A seed that fails or is not one finite number ends the attempt with a `CostCodeError`, like any function
+    of the code that fails at run time."""
+    out: dict[int, float] = {}
+    for axis, index in SEED_AXES.items():
+        name = f"{spec.cost}_seed_{axis}"
+        if not program.has(name):
+            continue
+        try:
+            value = np.asarray(program.call(name, state_env(obs, scene, env0, None, 0.0)), dtype=float).ravel()
+        except SandboxError as exc:
+            raise CostCodeError(f"stage {spec.name} seed: {exc}") from None
+        if value.size != 1 or not np.isfinite(value[0]):
+            raise CostCodeError(f"stage {spec.name} seed: {name}() must return one finite number, "
+                                f"got {value.size} values")
+        out[index] = float(value[0])
+    return out
 
 
 def _preload(spec: StageSpec, obs: Observation, cfg) -> dict[int, float]:  # noqa: ANN001
