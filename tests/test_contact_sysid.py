@@ -80,3 +80,44 @@ def test_windows_hold_what_the_robot_saw() -> None:
     obs = log.obs[5]
     raw = raw_ft(obs, planning.layout.hand_weight_n)
     assert np.allclose(tared_force_world(raw, obs.ee[3], planning.layout.hand_weight_n), obs.force)
+
+
+def _obs(t: float, ee_z: float, force_z: float, obj_z: float, speed: float):  # noqa: ANN202
+    from kintsugi.tasks.contact.robot import Observation, TrackedObject
+
+    box = TrackedObject(pos=np.array([0.1, 0.0, obj_z]), quat=np.array([1.0, 0, 0, 0]),
+                        lin_vel=np.array([speed, 0.0, 0.0]), ang_vel=np.zeros(3))
+    return Observation(t=t, ee=np.array([0.0, 0.0, ee_z, 0.0]), ee_vel=np.zeros(4), fingers=np.zeros(2),
+                       finger_vel=np.zeros(2), force=np.array([0.0, 0.0, force_z]), torque=np.zeros(3),
+                       touch=np.zeros(2), objects={"box": box}, ctrl=np.zeros(5))
+
+
+@pytest.mark.parametrize(("ee_z", "force_z", "obj_z", "speed", "kind"), [
+    (0.008, -0.5, 0.025, 0.05, "slide"),   # pushed along the table: its friction is in the push
+    (0.0005, -12.0, 0.025, 0.05, "grind"),  # fingertips pressing the table: the pads' drag swamps it
+    (0.0005, -12.0, 0.025, 0.0, "grind"),
+    (0.2, 3.0, 0.15, 0.05, "felt"),        # carried: only its weight shows
+    (0.2, 3.0, 0.15, 0.0, "felt"),
+    (0.2, 0.0, 0.025, 0.0, None),          # nothing moved, nothing felt
+])
+def test_a_window_is_judged_by_what_the_robot_read(ee_z, force_z, obj_z, speed, kind) -> None:  # noqa: ANN001
+    from kintsugi.tasks.contact.identify import _kind
+
+    seg = [_obs(0.01 * k, ee_z, force_z, obj_z, speed) for k in range(31)]
+    assert _kind(seg, "box", rest_z=0.025) == kind
+
+
+def test_without_a_slide_the_fit_keeps_the_friction_belief() -> None:
+    _, cfg, world, setup, ctx = _ctx("physics", 3)
+    robot = ContactRobot(world)
+    planning = PlanningWorld(cfg, ctx.known, MPPISysId(ctx).prior())
+    fitter = BeliefFitter(planning, "box", cfg.sysid.mass_bounds_kg, cfg.sysid.friction_bounds,
+                          SysIdConfig(grid=5, zoom_rounds=0, max_evals=0, nthread=2, substeps=5))
+    _push_and_release(robot, setup, 0.35)
+    fitter.add(robot.new_log())
+    assert fitter.slid
+    for w in fitter.logs:
+        w.label = "felt"  # as if the box had only been lifted
+    belief = planning.physics_of("box").friction
+    phys, result = fitter.fit()
+    assert not fitter.slid and phys.friction == belief and set(result.params) == {"mass:box"}

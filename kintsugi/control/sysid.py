@@ -109,6 +109,8 @@ class ExecutionLog:
     controls: np.ndarray  # (N, nu)
     observed: dict[str, np.ndarray]
     dt: float
+    label: str = ""
+    """The caller's note of what the log can inform (e.g. "slide"); the fit ignores it."""
 
 
 @dataclass

@@ -203,7 +203,8 @@ class Coral:
             log.event(self._now, "sysid", f"no fit: {exc}"[:200])
             return None
         log.event(self._now, "sysid", f"{added} new windows ({len(fitter.logs)} in all): {obj} "
-                  f"{phys.mass_kg:.3f} kg, friction {phys.friction:.3f} (loss {fit.prior_loss:.3g} -> {fit.loss:.3g})")
+                  f"{phys.mass_kg:.3f} kg, friction {phys.friction:.3f} (loss {fit.prior_loss:.3g} -> {fit.loss:.3g})"
+                  + ("" if fitter.slid else "; friction kept: the object never slid on the table"))
         return SysIdSummary(object=obj, mass_kg=phys.mass_kg, friction=phys.friction, loss_prior=fit.prior_loss,
                             loss_fit=fit.loss, windows=len(fitter.logs))
 

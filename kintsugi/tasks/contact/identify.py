@@ -28,6 +28,13 @@ WINDOW_CAP = 1.0
 the fingertips drag on the table replays stick-slip differently on a 1 % change of any parameter, and its
 loss (2-8) would otherwise decide the fit (T1: friction 0.20 fitted for a true 0.37)."""
 FORCE_N = 0.5
+MIN_FELT = 8
+"""Windows kept for the weight (lifting, carrying) however many sliding windows there are."""
+ON_TABLE_M = 0.004
+"""The object counts as resting on the table while its tracked height stays this close to its start."""
+TABLE_TOUCH_M = 0.002
+GRIND_N = 3.0
+"""Fingertips this close to the table top while the wrist pushes down harder than this: grinding on it."""
 
 
 def raw_ft(obs: Observation, hand_weight_n: float) -> np.ndarray:
@@ -37,18 +44,50 @@ def raw_ft(obs: Observation, hand_weight_n: float) -> np.ndarray:
     return np.array([c * f[0] + s * f[1], -s * f[0] + c * f[1], f[2]])
 
 
+def _kind(seg: list[Observation], obj: str, rest_z: float) -> str | None:
+    """What a window of the log can tell, from the robot's own readings (None: nothing).
+
+    - "slide": the object moved while resting on the table (its height as at the start): its friction
+      against the table is in the push force and the motion;
+    - "grind": as "slide" or "felt", but the fingertips were down on the table top pressing on it: the
+      pads' drag on the table (their friction is high, and it flips between stick and slip) swamps the
+      object's own friction force, and no replay follows it; such a window is left out;
+    - "felt": the wrist felt a force, or the object moved off the table (lifted, carried): its weight is in it.
+    """
+    moving = max(np.linalg.norm(o.objects[obj].lin_vel) for o in seg) > MOVING_M_S
+    pressed = max(np.linalg.norm(o.force) for o in seg) > FORCE_N
+    if not (moving or pressed):
+        return None
+    grinding = any(o.ee[2] < TABLE_TOUCH_M and -o.force[2] > GRIND_N for o in seg)
+    on_table = all(abs(o.objects[obj].pos[2] - rest_z) < ON_TABLE_M for o in seg)
+    if grinding and on_table:
+        return "grind"
+    return "slide" if moving and on_table else "felt"
+
+
 def windows(planning: PlanningWorld, log: ExecutionLog, obj: str, ticks: int = WINDOW_TICKS) -> list[ReplayLog]:
-    """Informative windows of one attempt as replay logs (states are planning-model states)."""
+    """Informative windows of one attempt as replay logs (states are planning-model states).
+
+    Every sliding window is kept (up to `MAX_WINDOWS` - `MIN_FELT`): they are the few that carry the
+    friction, and even thinning among all windows dropped half of them for the many windows of a
+    carried object. The rest of the budget goes to the other windows, evenly spread over the attempt."""
     n = len(log.obs) - 1
-    out: list[ReplayLog] = []
+    if n < ticks:
+        return []
     hw = planning.layout.hand_weight_n
-    dt = float(np.median(np.diff([o.t for o in log.obs]))) if n > 1 else 0.0
+    dt = float(np.median(np.diff([o.t for o in log.obs])))
+    rest_z = float(log.obs[0].objects[obj].pos[2])
+    picked: dict[str, list[int]] = {"slide": [], "felt": []}
     for i in range(0, n - ticks + 1, ticks):
+        kind = _kind(log.obs[i:i + ticks + 1], obj, rest_z)
+        if kind in picked:
+            picked[kind].append(i)
+    slides = _thinned(picked["slide"], MAX_WINDOWS - min(MIN_FELT, len(picked["felt"])))
+    starts = sorted(slides + _thinned(picked["felt"], MAX_WINDOWS - len(slides)))
+    out: list[ReplayLog] = []
+    for i in starts:
+        kind = "slide" if i in slides else "felt"
         seg = log.obs[i:i + ticks + 1]
-        moving = max(np.linalg.norm(o.objects[obj].lin_vel) for o in seg) > MOVING_M_S
-        pressed = max(np.linalg.norm(o.force) for o in seg) > FORCE_N
-        if not (moving or pressed):
-            continue
         start = seg[0]
         data = planning.sync(start.ee, start.ee_vel, start.fingers, start.finger_vel,
                              {k: (o.pos, o.quat, o.lin_vel, o.ang_vel) for k, o in start.objects.items()},
@@ -57,11 +96,17 @@ def windows(planning: PlanningWorld, log: ExecutionLog, obj: str, ticks: int = W
             initial_state=get_state(planning.model, data), controls=np.array(log.ctrl[i:i + ticks]),
             observed={f"{obj}_pos": np.array([o.objects[obj].pos for o in seg[1:]]),
                       "ft_force": np.array([raw_ft(o, hw) for o in seg[1:]])},
-            dt=dt))
-    if len(out) > MAX_WINDOWS:  # evenly thinned: bounded cost, whole attempt still covered
-        keep = np.linspace(0, len(out) - 1, MAX_WINDOWS).round().astype(int)
-        out = [out[k] for k in keep]
+            dt=dt, label=kind))
     return out
+
+
+def _thinned(starts: list[int], keep: int) -> list[int]:
+    """At most `keep` of the window starts, evenly spread (bounded cost, the whole attempt still covered)."""
+    if keep <= 0:
+        return []
+    if len(starts) <= keep:
+        return starts
+    return [starts[k] for k in np.linspace(0, len(starts) - 1, keep).round().astype(int)]
 
 
 class BeliefFitter:
@@ -92,11 +137,22 @@ class BeliefFitter:
         self.logs += new
         return len(new)
 
+    @property
+    def slid(self) -> bool:
+        """Whether any window so far saw the object slide on the table: without one, its friction against
+        the table left no trace (a lift or a grinding push does not show it), so the fit keeps the belief
+        rather than report whatever a flat loss happens to favour."""
+        return any(w.label == "slide" for w in self.logs)
+
     def fit(self) -> tuple[Physics, SysIdResult]:
-        """Fit on every window so far and write the beliefs into the planning world (all the object's geoms)."""
+        """Fit on every window so far and write the beliefs into the planning world (all the object's geoms).
+        The friction is fitted only once the object has slid (see `slid`)."""
         if not self.logs:
             raise ConfigError(f"no informative window in the log: {self.obj!r} never moved and nothing was felt")
-        result = fit(SysIdProblem(self.planning.model, self.params, self.signals, self.logs, self.cfg))
-        phys = Physics(mass_kg=result.params[f"mass:{self.obj}"], friction=result.params[f"friction:{self.geom}"])
+        params = self.params if self.slid else self.params[:1]
+        result = fit(SysIdProblem(self.planning.model, params, self.signals, self.logs, self.cfg))
+        belief = self.planning.physics_of(self.obj)
+        phys = Physics(mass_kg=result.params[f"mass:{self.obj}"],
+                       friction=result.params.get(f"friction:{self.geom}", belief.friction))
         self.planning.set_beliefs({self.obj: phys})
         return phys, result
