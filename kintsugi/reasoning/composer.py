@@ -25,7 +25,7 @@ UPRIGHT_HEIGHT_RATIO = 0.6
 """Undecided uprightness: a standing cup is ~0.7 as tall as its largest extent, a fallen bottle ~0.3."""
 LIFTED_Z_M = 0.05
 """A held object whose lowest point is this high is clear of the table."""
-_FN = re.compile(r"^\$(x|y|z|hy|nhy|rx|ry|yaw|mirror)\(\s*(\?[A-Za-z0-9_]+)\s*(?:,\s*(-?[0-9.eE+-]+)\s*)?\)$")
+_FN = re.compile(r"^\$(x|y|z|hy|nhy|rx|ry|yaw|mirror|thin)\(\s*(\?[A-Za-z0-9_]+)\s*(?:,\s*(-?[0-9.eE+-]+)\s*)?\)$")
 _FN2 = re.compile(r"^\$(dx|dy|turn)\(\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*,\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*\)$")
 FLAT_RATIO = 1.1
 """An object no taller than this times its middle extent lies flat (a fork, a tray, a cube; not a standing bottle)."""
@@ -248,7 +248,8 @@ def fill(value: Any, binding: dict[str, str], seen: dict[str, SeenObject], where
     plus d, `$hy(?obj, d)` / `$nhy` -> +/- (half its perceived y extent + d), `$rx(?place)` / `$ry` -> the
     region's centre, `$dx(?obj, ?place)` / `$dy` -> region centre minus the object's centroid, `$turn(?obj,
     ?dir)` -> the turn about the vertical bringing the object's head to the direction, `$yaw(?dir)` -> the
-    direction's yaw (degrees), `$mirror(?arm, v)` -> v for the right arm, -v for the left; lists and dicts
+    direction's yaw (degrees), `$thin(?obj, d)` -> its thinnest perceived span plus d, `$mirror(?arm, v)` -> v
+    for the right arm, -v for the left; lists and dicts
     recursively. `where`: place -> (x, y)."""
     if isinstance(value, dict):
         return {k: fill(v, binding, seen, where) for k, v in value.items()}
@@ -281,9 +282,11 @@ def fill(value: Any, binding: dict[str, str], seen: dict[str, SeenObject], where
             raise PlanningError(f"template {value!r}: {arg!r} is not a known direction")
         return round(float(psi) + d, 3)
     obj = seen.get(arg)
-    if fn in ("hy", "nhy"):
+    if fn in ("hy", "nhy", "thin"):
         if obj is None or obj.extent is None:
             raise PlanningError(f"template {value!r}: object {arg!r} has no perceived extent")
+        if fn == "thin":  # its thinnest perceived span (its thickness, however it lies) plus d
+            return round(min(obj.extent) + d, 4)
         half = obj.extent[1] / 2.0 + d
         return round(half if fn == "hy" else -half, 4)
     if obj is None or obj.centroid is None:

@@ -43,6 +43,11 @@ UPEND_LIFT_M = 0.15
 """Standing a fallen object up: lift it this high before turning it (its lower half swings down)."""
 HEADING_TOL_DEG = 20.0
 """A sub-goal `heading` holds when the perceived head (judged with no hand on the object) is this close to it."""
+GENTLE_CLOSE_S = 0.2
+"""Closing on an object lying flat: the fingers are brought closed over this long rather than at once."""
+FLAT_MARGIN_M = 0.008
+"""`flat` holds while the object's height exceeds its thinnest perceived span by no more than this (perception
+reads a lying fork's height to a few millimetres; one on its side is 2-3 cm taller)."""
 REGION_TOL_M = 0.04
 """A sub-goal `in_region` holds when the perceived centroid is this close (x and y) to the region's centre."""
 
@@ -70,7 +75,11 @@ PREDICATES = [
     _p("tilted", ["object"], "the object is tilted to pouring", [{"kind": "tilted", "object": "?1", "min_deg": 60}]),
     _p("poured", ["object", "object"], "the first object was tilted to pour over the second (history)"),
     _p("released", ["object"], "no arm holds the object"),
-    _p("flat", ["object"], "the object lies flat (it is no taller than it is wide), on the table or level in the hand"),
+    _p("flat", ["object"], "the object lies flat (it is no taller than it is wide), on the table or level in the hand; "
+       "checked as: its height (top above bottom) no more than its thinnest perceived span plus a margin (a fork "
+       "or spoon rolled onto its side is as tall as its head is wide)",
+       [{"kind": "above", "a": {"entity": "?1", "feature": "bottom", "offset": [0.0, 0.0, f"$thin(?1, {FLAT_MARGIN_M})"]},
+         "b": {"entity": "?1", "feature": "top"}, "min_gap": 0.0}]),
     _p("stands", ["object"], "the object has a base it stands on: it was seen standing with a clear axis (a bottle, "
        "a cup; not a cube or a fork), so it can fall over and be stood back up (static)", static=True),
     _p("narrow", ["object"], "the object fits between one gripper's open fingers (static, from its perceived size)",
@@ -140,8 +149,9 @@ OPERATORS = [
         ["hand_empty(?arm)", "narrow(?obj)", "flat(?obj)", "not upright(?obj)", "on_table(?obj)",
          "released(?obj)"],
         ["holding(?arm, ?obj)"], ["hand_empty(?arm)", "released(?obj)"],
-        [{"name": "grasp", "args": {"arm": A, "obj": O, "pre_grasp_offset": 0.06}}], 260,
-        "open, come down over an object lying flat, close on it"),
+        [{"name": "grasp", "args": {"arm": A, "obj": O, "pre_grasp_offset": 0.06, "close_s": GENTLE_CLOSE_S}}], 280,
+        "open, come down over an object lying flat, close on it gently (a thin utensil struck by both pads at "
+        "once can pop up onto its side)"),
     _op("stand_up", {A: "arm", O: "object"},
         ["hand_empty(?arm)", "narrow(?obj)", "stands(?obj)", "not upright(?obj)", "on_table(?obj)",
          "released(?obj)"],

@@ -50,6 +50,8 @@ class Grasp(_Action):
     """Orientation hint: the heading (from +x, about the vertical) of the approach axis for a side grasp,
     or of the gripper's x axis for a top-down one. Default: away from the arm's base (and, top-down,
     closing across the object's principal axis)."""
+    close_s: float = Field(0.0, ge=0.0, le=2.0)
+    """Close gently: the fingers are brought closed over this many seconds (0: at once)."""
 
 
 class OpenGripper(_Action):
@@ -58,6 +60,8 @@ class OpenGripper(_Action):
 
 class CloseGripper(_Action):
     action: Literal["close_gripper"] = "close_gripper"
+    close_s: float = Field(0.0, ge=0.0, le=2.0)
+    """Close gently: the fingers are brought closed over this many seconds (0: at once)."""
 
 
 class MoveToObj(_Action):

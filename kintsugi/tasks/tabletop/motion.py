@@ -34,6 +34,10 @@ class Move:
 class Grip:
     closed: bool
     label: str = ""
+    ramp_s: float = 0.0
+    """Closing only: bring the fingers' commanded travel from where they are to closed over this long (the
+    paper's close_gripper sample_num), instead of at once: the squeeze builds up instead of the pads striking
+    (a thin utensil struck by both pads at once can pop up and roll onto its side)."""
 
 
 Step = Move | Grip
@@ -57,6 +61,7 @@ class _Cursor:
     duration: float = 0.0
     end_time: float | None = None
     reports: list[StepReport] = field(default_factory=list)
+    travel0: float = 0.0  # a gentle close starts from this commanded travel
 
     @property
     def done(self) -> bool:
@@ -72,7 +77,7 @@ def planned_duration(steps: list[Step], start: np.ndarray, motion: MotionSection
             total += _duration(path, s.min_duration_s, motion)
             q = s.waypoints[-1]
         else:
-            total += motion.gripper_time_s / 2
+            total += motion.gripper_time_s / 2 + (s.ramp_s if s.closed else 0.0)
     return total
 
 
@@ -122,7 +127,11 @@ def _start(world: TabletopWorld, arm: str, c: _Cursor, motion: MotionSection) ->
         c.t0 = float(world.data.time)
         c.end_time = None
         if isinstance(step, Grip):
-            world.set_grip(arm, step.closed)
+            if step.closed and step.ramp_s > 0.0:
+                c.travel0 = world.cfg.robot.gripper_max_opening_m - world.gripper_opening(arm)
+                world.set_grip_travel(arm, c.travel0)
+            else:
+                world.set_grip(arm, step.closed)
             return
         c.path = np.vstack([world.joint_targets(arm), *step.waypoints])
         seg = np.abs(np.diff(c.path, axis=0)).max(axis=1)
@@ -136,6 +145,13 @@ def _advance(world: TabletopWorld, arm: str, c: _Cursor, t: float, motion: Motio
     step = c.steps[c.index]
     elapsed = t - c.t0
     if isinstance(step, Grip):
+        ramp = step.ramp_s if step.closed else 0.0
+        if ramp > 0.0:
+            full = world.cfg.robot.gripper_max_opening_m
+            world.set_grip_travel(arm, c.travel0 + (full - c.travel0) * min(elapsed / ramp, 1.0))
+            elapsed -= ramp
+            if elapsed < 0.0:
+                return False
         still = world.finger_speed(arm) < FINGER_STILL
         if (elapsed >= 0.08 and still) or elapsed >= motion.gripper_time_s:
             c.reports.append(StepReport(label=step.label or ("close" if step.closed else "open")))

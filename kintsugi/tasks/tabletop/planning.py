@@ -149,7 +149,7 @@ class Planner:
         return [Grip(False, "open")]
 
     def _close_gripper(self, a: A.CloseGripper, arm: ArmView, feats: dict) -> list[Step]:
-        return [Grip(True, "close")]
+        return [Grip(True, "close", ramp_s=a.close_s)]
 
     def _back(self, a: A.Back, arm: ArmView, feats: dict) -> list[Step]:
         home = self.iks[a.arm].home
@@ -217,7 +217,7 @@ class Planner:
             q_pre = down.waypoints[-1]
         return steps + [
             self._linear(a.arm, (pre, rot), (c, rot), q_pre, f"the grasp pose of {a.obj}", f"approach {a.obj}"),
-            Grip(True, "close"),
+            Grip(True, "close", ramp_s=a.close_s),
         ]
 
     def _place(self, a: A.Place, arm: ArmView, feats: dict) -> list[Step]:
