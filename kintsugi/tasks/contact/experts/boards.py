@@ -50,10 +50,12 @@ PUSH_NOISE = 0.5
 samples hovers behind the plate near the end of the push (the lead a slow push needs is lost in the spread),
 and the push stalls a centimetre short of its target."""
 MAX_PRESS_N = 3.0
-"""While the fingertips work next to the table top, the z command stays at most this force (through the z
-servo's stiffness) below it. Without it the z command drifts down where the cost is flat (the table stops the
-fingertips), the fingers grind into the table with 15-25 N and drag on it with the pads' friction: the x servo
-saturates, the push stick-slips, and the board's own friction (about 1.5 N) is lost under the drag."""
+PRESS_W = 0.1
+"""Cost per newton the fingertips press on the table beyond MAX_PRESS_N (predicted wrist force). Without it
+the z command drifts down where the cost is flat (the table stops the fingertips), the fingers grind into
+the table with 15-25 N and drag on it with the pads' friction: the x servo saturates, the push stick-slips,
+and the board's own friction (about 1.5 N) is lost under the drag. (A floor on the z command instead biased
+the samples' mean upwards: the approach then hovered 2 cm above its target.)"""
 
 
 def _hold(target: np.ndarray, yaw: float, floor: float | None = None):  # noqa: ANN202 - a cost
@@ -70,14 +72,9 @@ def _hold(target: np.ndarray, yaw: float, floor: float | None = None):  # noqa: 
     return cost
 
 
-def _no_press(cfg: PushPickBoardConfig):  # noqa: ANN202 - a cost term
-    """Running cost of a z command below the table top by more than MAX_PRESS_N through the z servo."""
-    floor = -MAX_PRESS_N / cfg.effector.kp_n_per_m
-
-    def cost(v: View) -> np.ndarray:
-        return total(200 * np.maximum(0.0, floor - v.ctrl[..., 2]))
-
-    return cost
+def pressing(v: View) -> np.ndarray:
+    """(K, T) running cost of pushing down on the table harder than MAX_PRESS_N."""
+    return PRESS_W * np.maximum(0.0, -v.force[..., 2] - MAX_PRESS_N)
 
 
 def _seed(target: np.ndarray, yaw: float | None = None) -> dict[int, float]:
@@ -119,7 +116,6 @@ def _costs(ctx: ContactContext):  # noqa: ANN202 - a bundle of closures
     edge = cfg.table.edge_x_m
     target = cfg.scoring.min_overhang_m + PUSH_MARGIN_M
     attract = Attractor(back_region(ctx), cfg.control.attractor_samples, seed=ctx.seed)
-    floor = -MAX_PRESS_N / cfg.effector.kp_n_per_m  # z command: see MAX_PRESS_N
 
     def over(v: View) -> np.ndarray:
         return overhang(v.pos("board"), v.quat("board"), geo, edge)
@@ -136,7 +132,7 @@ def _costs(ctx: ContactContext):  # noqa: ANN202 - a bundle of closures
         ov = over(v)
         board_yaw = yaw_of(v.quat("board"))
         return (20 * norm(v.tcp - ref[None]) + 100 * np.maximum(ov - target - 0.01, 0.0)
-                + 40 * np.maximum(0.0, v.tcp[..., 2] - contact[2] - PUSH_Z) + 200 * np.maximum(0.0, floor - v.ctrl[..., 2])
+                + 40 * np.maximum(0.0, v.tcp[..., 2] - contact[2] - PUSH_Z) + pressing(v)
                 + 5 * np.abs(v.pos("board")[..., 1] - y0) + 2 * np.abs(board_yaw - yaw0)
                 + 0.5 * yaw_error(v.yaw, 0.0) ** 2 + W_SMOOTH * smoothness(v))
 
@@ -154,7 +150,7 @@ def push_pick_board_fsm(ctx: ContactContext) -> list[StageFactory]:
         o = obs.objects["board"]
         behind = attract.world_targets(o.pos, o.quat)[0] - np.array([0.03, 0.0, 0.0])
         behind[2] = PUSH_Z
-        return Stage("approach", hold_tcp(behind, 0.0, extra=_no_press(cfg)), lambda o2: near(o2, behind, 0.012), grip=0.0, timeout_s=4.0,
+        return Stage("approach", hold_tcp(behind, 0.0, extra=lambda v: total(pressing(v))), lambda o2: near(o2, behind, 0.012), grip=0.0, timeout_s=4.0,
                      goal={"x_mm": behind[0] * 1000, "z_mm": PUSH_Z * 1000})
 
     def to_edge(obs: Observation) -> Stage:
