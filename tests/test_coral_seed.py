@@ -55,13 +55,14 @@ def test_the_edge_pick_seeds_each_move_at_its_goal(board_trial) -> None:  # noqa
     assert reach[0] == pytest.approx(edge + k["pinch_past_edge_m"]) and reach[2] == pytest.approx(k["travel_z_m"])
     assert reach[1] == pytest.approx(b.pos[1] + (edge + k["pinch_past_edge_m"] - b.pos[0]) * math.tan(yaw))
     assert reach[3] == pytest.approx(yaw)
-    # descend: straight down where the hand is; lift: up and back over the table; hold: where it is
+    # descend: straight down where the hand is; lift: up and back over the table; grasp and hold: where it is
     assert stages["descend"].seed_plan == pytest.approx({0: tcp[0], 1: tcp[1], 2: k["under_edge_z_m"]})
     assert stages["lift"].seed_plan == pytest.approx({0: tcp[0] - 0.03, 1: tcp[1], 2: k["edge_lift_z_m"]})
-    assert stages["hold"].seed_plan == pytest.approx({0: tcp[0], 1: tcp[1], 2: tcp[2], 3: float(obs.ee[3])})
+    here = {0: tcp[0], 1: tcp[1], 2: tcp[2], 3: float(obs.ee[3])}
+    assert stages["hold"].seed_plan == pytest.approx(here) and stages["grasp"].seed_plan == pytest.approx(here)
     assert stages["back-off"].seed_plan == pytest.approx({0: tcp[0] - 0.03, 1: tcp[1], 2: k["travel_z_m"], 3: 0.0})
-    # the push and the pinch keep the plan they inherit (no seed functions)
-    assert stages["push"].seed_plan == {} and stages["grasp"].seed_plan == {}
+    # the push keeps the plan it inherits (no seed functions)
+    assert stages["push"].seed_plan == {}
 
 
 def test_a_seed_must_be_one_finite_number(board_trial) -> None:  # noqa: ANN001

@@ -30,7 +30,7 @@ DEFAULT_KNOBS: dict[str, float] = {
     "tip_deg": 45.0, "pivot_deg": 100.0, "flip_deg": 75.0, "reach_tol_m": 0.012, "force_tol_n": 0.4,
     "timeout_scale": 1.0, "hold_press_s": 2.0,
     "overhang_m": 0.09, "pinch_past_edge_m": 0.035, "under_edge_z_m": -0.012, "travel_z_m": 0.07,
-    "edge_lift_z_m": 0.28, "edge_touch_n": 5.0,
+    "edge_lift_z_m": 0.28, "edge_touch_n": 5.0, "still_m_s": 0.03,
 }
 """Weights (cost units per metre, newton, radian) and thresholds the skills are written with."""
 
@@ -634,11 +634,13 @@ def over_end_cost(tcp, yaw, step_change, start_{n}_pos, start_{n}_yaw, table_edg
             + 200.0 * relu({travel - 0.02} - tcp[..., 2]) + W_SMOOTH * step_change)
 
 
-def over_end_done(tcp, yaw, start_{n}_pos, start_{n}_yaw, table_edge_x):
+def over_end_done(tcp, yaw, tcp_vel, start_{n}_pos, start_{n}_yaw, table_edge_x):
+    """There, turned, and no longer moving (a hand still swinging in comes down beside the pinch point)."""
     ex = tcp[..., 0] - table_edge_x - {past}
     ey = tcp[..., 1] - pinch_y(start_{n}_pos, start_{n}_yaw, table_edge_x)
     ez = tcp[..., 2] - {travel}
-    return logical_and(sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.01, abs(wrap_pi(yaw - start_{n}_yaw)) < 0.05)
+    there = logical_and(sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.01, abs(wrap_pi(yaw - start_{n}_yaw)) < 0.05)
+    return logical_and(there, norm(tcp_vel) < {k["still_m_s"]})
 
 
 def over_end_cost_seed_x(table_edge_x):
@@ -678,12 +680,14 @@ def under_cost_seed_z(start_tcp):
     return {under} + 0.0 * start_tcp[2]
 
 
-def under_done(tcp, start_tcp):
+def under_done(tcp, tcp_vel, start_tcp):
+    """Down and stopped: fingers that close while the hand still sinks drag the handle down, and the board
+    levers up over the table edge."""
     ex = tcp[..., 0] - start_tcp[0]
     ey = tcp[..., 1] - start_tcp[1]
     ez = tcp[..., 2] - ({under})
-    return sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.006''', k))
-    plan.code.append(_sub(_hold_code("pinch_cost", w_yaw="30.0"), k))
+    return logical_and(sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.006, norm(tcp_vel) < {k["still_m_s"]})''', k))
+    plan.code.append(_sub(_hold_code("pinch_cost", w_yaw="30.0", seed=True), k))
     plan.code.append(f'''def pinch_done(touch):
     return min(touch, axis=-1) > {k["edge_touch_n"]}''')
     plan.code.append(_sub(f'''def lift_end_cost(tcp, yaw, step_change, start_tcp, start_yaw, {n}_pos, start_{n}_pos):
@@ -719,7 +723,8 @@ def lift_end_done(tcp, touch, start_tcp):
         StageSpec(name="reach", cost="over_end_cost", done="over_end_done", grip="open", timeout_s=_t(k, 4.0)),
         StageSpec(name="descend", cost="under_cost", done="under_done", grip="open", noise_scale=0.35,
                   timeout_s=_t(k, 3.0)),
-        StageSpec(name="grasp", cost="pinch_cost", done="pinch_done", grip="closed", hold_s=0.3, timeout_s=_t(k, 2.0)),
+        StageSpec(name="grasp", cost="pinch_cost", done="pinch_done", grip="closed", hold_s=0.3, noise_scale=0.35,
+                  timeout_s=_t(k, 2.0)),
         StageSpec(name="lift", cost="lift_end_cost", done="lift_end_done", grip="closed", timeout_s=_t(k, 4.0)),
         StageSpec(name="hold", cost="still_cost", done="still_done", grip="closed", hold_s=0.3, noise_scale=0.25,
                   timeout_s=_t(k, 4.0)),
