@@ -82,28 +82,29 @@ def test_windows_hold_what_the_robot_saw() -> None:
     assert np.allclose(tared_force_world(raw, obs.ee[3], planning.layout.hand_weight_n), obs.force)
 
 
-def _obs(t: float, ee_z: float, force_z: float, obj_z: float, speed: float):  # noqa: ANN202
+def _obs(t: float, ee_z: float, force_z: float, obj_z: float, speed: float, touch: float = 0.0):  # noqa: ANN202
     from kintsugi.tasks.contact.robot import Observation, TrackedObject
 
     box = TrackedObject(pos=np.array([0.1, 0.0, obj_z]), quat=np.array([1.0, 0, 0, 0]),
                         lin_vel=np.array([speed, 0.0, 0.0]), ang_vel=np.zeros(3))
     return Observation(t=t, ee=np.array([0.0, 0.0, ee_z, 0.0]), ee_vel=np.zeros(4), fingers=np.zeros(2),
                        finger_vel=np.zeros(2), force=np.array([0.0, 0.0, force_z]), torque=np.zeros(3),
-                       touch=np.zeros(2), objects={"box": box}, ctrl=np.zeros(5))
+                       touch=np.full(2, touch), objects={"box": box}, ctrl=np.zeros(5))
 
 
-@pytest.mark.parametrize(("ee_z", "force_z", "obj_z", "speed", "kind"), [
-    (0.008, -0.5, 0.025, 0.05, "slide"),   # pushed along the table: its friction is in the push
-    (0.0005, -12.0, 0.025, 0.05, "grind"),  # fingertips pressing the table: the pads' drag swamps it
-    (0.0005, -12.0, 0.025, 0.0, "grind"),
-    (0.2, 3.0, 0.15, 0.05, "felt"),        # carried: only its weight shows
-    (0.2, 3.0, 0.15, 0.0, "felt"),
-    (0.2, 0.0, 0.025, 0.0, None),          # nothing moved, nothing felt
+@pytest.mark.parametrize(("ee_z", "force_z", "obj_z", "speed", "touch", "kind"), [
+    (0.008, -0.5, 0.025, 0.05, 0.0, "slide"),   # pushed along the table: its friction is in the push
+    (0.0005, -12.0, 0.025, 0.05, 0.0, "grind"),  # fingertips pressing the table: the pads' drag swamps it
+    (0.0005, -12.0, 0.025, 0.0, 0.0, "grind"),
+    (0.008, -0.5, 0.025, 0.05, 4.0, "felt"),    # dragged in the pinch: the grip, not the table, sets its motion
+    (0.2, 3.0, 0.15, 0.05, 4.0, "felt"),        # carried: only its weight shows
+    (0.2, 3.0, 0.15, 0.0, 4.0, "felt"),
+    (0.2, 0.0, 0.025, 0.0, 0.0, None),          # nothing moved, nothing felt
 ])
-def test_a_window_is_judged_by_what_the_robot_read(ee_z, force_z, obj_z, speed, kind) -> None:  # noqa: ANN001
+def test_a_window_is_judged_by_what_the_robot_read(ee_z, force_z, obj_z, speed, touch, kind) -> None:  # noqa: ANN001
     from kintsugi.tasks.contact.identify import _kind
 
-    seg = [_obs(0.01 * k, ee_z, force_z, obj_z, speed) for k in range(31)]
+    seg = [_obs(0.01 * k, ee_z, force_z, obj_z, speed, touch) for k in range(31)]
     assert _kind(seg, "box", rest_z=0.025) == kind
 
 

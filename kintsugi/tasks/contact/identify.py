@@ -32,6 +32,8 @@ MIN_FELT = 8
 """Windows kept for the weight (lifting, carrying) however many sliding windows there are."""
 ON_TABLE_M = 0.004
 """The object counts as resting on the table while its tracked height stays this close to its start."""
+PINCH_N = 0.5
+"""Both finger pads feel at least this: the object is in the pinch."""
 TABLE_TOUCH_M = 0.002
 GRIND_N = 3.0
 """Fingertips this close to the table top while the wrist pushes down harder than this: grinding on it."""
@@ -52,7 +54,8 @@ def _kind(seg: list[Observation], obj: str, rest_z: float) -> str | None:
     - "grind": as "slide" or "felt", but the fingertips were down on the table top pressing on it: the
       pads' drag on the table (their friction is high, and it flips between stick and slip) swamps the
       object's own friction force, and no replay follows it; such a window is left out;
-    - "felt": the wrist felt a force, or the object moved off the table (lifted, carried): its weight is in it.
+    - "felt": the wrist felt a force, or the object moved off the table (lifted, carried), or it moved in the
+      pinch of both pads (the pads' grip, not the table, then sets how it moves): its weight is in it.
     """
     moving = max(np.linalg.norm(o.objects[obj].lin_vel) for o in seg) > MOVING_M_S
     pressed = max(np.linalg.norm(o.force) for o in seg) > FORCE_N
@@ -62,7 +65,8 @@ def _kind(seg: list[Observation], obj: str, rest_z: float) -> str | None:
     on_table = all(abs(o.objects[obj].pos[2] - rest_z) < ON_TABLE_M for o in seg)
     if grinding and on_table:
         return "grind"
-    return "slide" if moving and on_table else "felt"
+    pinched = any(o.touch.min() > PINCH_N for o in seg)
+    return "slide" if moving and on_table and not pinched else "felt"
 
 
 def windows(planning: PlanningWorld, log: ExecutionLog, obj: str, ticks: int = WINDOW_TICKS) -> list[ReplayLog]:
