@@ -720,14 +720,15 @@ def lift_end_done(tcp, touch, start_tcp):
     plan.code.append(f'''def still_done({n}_vel, {n}_spin):
     return logical_and(norm({n}_vel) < 0.015, {n}_spin < 0.2)''')
     plan.stages += [
-        StageSpec(name="reach", cost="over_end_cost", done="over_end_done", grip="open", timeout_s=_t(k, 4.0)),
+        StageSpec(name="reach", cost="over_end_cost", done="over_end_done", grip="open", noise_scale=0.35,
+                  timeout_s=_t(k, 4.0)),
         StageSpec(name="descend", cost="under_cost", done="under_done", grip="open", noise_scale=0.35,
                   timeout_s=_t(k, 3.0)),
         StageSpec(name="grasp", cost="pinch_cost", done="pinch_done", grip="closed", hold_s=0.3, noise_scale=0.35,
                   timeout_s=_t(k, 2.0)),
         StageSpec(name="lift", cost="lift_end_cost", done="lift_end_done", grip="closed", timeout_s=_t(k, 4.0)),
         StageSpec(name="hold", cost="still_cost", done="still_done", grip="closed", hold_s=0.3, noise_scale=0.25,
-                  timeout_s=_t(k, 4.0)),
+                  timeout_s=_t(k, 8.0)),
     ]
     plan.why.append(f"Then reach above the overhanging end {past * 100:g} cm past the edge with the open hand turned "
                     f"across it, go down until the fingertips are {-under * 100:g} cm below the table top, close until "
