@@ -50,14 +50,20 @@ def _push_and_release(robot: ContactRobot, setup, speed: float) -> None:  # noqa
     robot.act(np.array([x0 + speed * 0.4 - 0.03, box[1], 0.008, 0, 0]), 0.6)
 
 
-def test_sysid_pulls_an_8x_1_8x_prior_toward_the_truth_from_the_robots_log() -> None:
+def _pushed(sysid: SysIdConfig):  # noqa: ANN202
+    """A fitter from the 8x / 1.8x prior holding the windows of one scripted push of the box (seed 3)."""
     _, cfg, world, setup, ctx = _ctx("physics", 3)
     robot = ContactRobot(world)
     planning = PlanningWorld(cfg, ctx.known, MPPISysId(ctx).prior())
-    fitter = BeliefFitter(planning, "box", cfg.sysid.mass_bounds_kg, cfg.sysid.friction_bounds,
-                          SysIdConfig(grid=9, zoom_rounds=2, max_evals=40, nthread=2, substeps=5))
+    fitter = BeliefFitter(planning, "box", cfg.sysid.mass_bounds_kg, cfg.sysid.friction_bounds, sysid)
     _push_and_release(robot, setup, 0.35)
-    assert fitter.add(robot.new_log()) >= 2
+    fitter.add(robot.new_log())
+    return fitter, planning, setup
+
+
+def test_sysid_pulls_an_8x_1_8x_prior_toward_the_truth_from_the_robots_log() -> None:
+    fitter, planning, setup = _pushed(SysIdConfig(grid=9, zoom_rounds=2, max_evals=40, nthread=2, substeps=5))
+    assert len(fitter.logs) >= 2
     phys, result = fitter.fit()
     truth = setup.truth["box"]
     assert result.loss < 0.2 * result.prior_loss
@@ -87,9 +93,9 @@ def _obs(t: float, ee_z: float, force_z: float, obj_z: float, speed: float, touc
 
     box = TrackedObject(pos=np.array([0.1, 0.0, obj_z]), quat=np.array([1.0, 0, 0, 0]),
                         lin_vel=np.array([speed, 0.0, 0.0]), ang_vel=np.zeros(3))
-    return Observation(t=t, ee=np.array([0.0, 0.0, ee_z, 0.0]), ee_vel=np.zeros(4), fingers=np.zeros(2),
+    return Observation(t=t, ee=np.array([0.0, 0.0, ee_z, 0.0]), ee_vel=np.zeros(4), fingers=np.full(2, 0.02 if touch > 0 else 0.0),
                        finger_vel=np.zeros(2), force=np.array([0.0, 0.0, force_z]), torque=np.zeros(3),
-                       touch=np.full(2, touch), objects={"box": box}, ctrl=np.zeros(5))
+                       touch=np.full(2, abs(touch)), objects={"box": box}, ctrl=np.zeros(5))
 
 
 @pytest.mark.parametrize(("ee_z", "force_z", "obj_z", "speed", "touch", "kind"), [
@@ -97,6 +103,7 @@ def _obs(t: float, ee_z: float, force_z: float, obj_z: float, speed: float, touc
     (0.0005, -12.0, 0.025, 0.05, 0.0, "grind"),  # fingertips pressing the table: the pads' drag swamps it
     (0.0005, -12.0, 0.025, 0.0, 0.0, "grind"),
     (0.008, -0.5, 0.025, 0.05, 4.0, "felt"),    # dragged in the pinch: the grip, not the table, sets its motion
+    (0.008, -0.5, 0.025, 0.05, -4.0, "slide"),  # (touch < 0: closed fingers, pads pressed on each other)
     (0.2, 3.0, 0.15, 0.05, 4.0, "felt"),        # carried: only its weight shows
     (0.2, 3.0, 0.15, 0.0, 4.0, "felt"),
     (0.2, 0.0, 0.025, 0.0, 0.0, None),          # nothing moved, nothing felt
@@ -109,13 +116,7 @@ def test_a_window_is_judged_by_what_the_robot_read(ee_z, force_z, obj_z, speed, 
 
 
 def test_without_a_slide_the_fit_keeps_the_friction_belief() -> None:
-    _, cfg, world, setup, ctx = _ctx("physics", 3)
-    robot = ContactRobot(world)
-    planning = PlanningWorld(cfg, ctx.known, MPPISysId(ctx).prior())
-    fitter = BeliefFitter(planning, "box", cfg.sysid.mass_bounds_kg, cfg.sysid.friction_bounds,
-                          SysIdConfig(grid=5, zoom_rounds=0, max_evals=0, nthread=2, substeps=5))
-    _push_and_release(robot, setup, 0.35)
-    fitter.add(robot.new_log())
+    fitter, planning, _ = _pushed(SysIdConfig(grid=5, zoom_rounds=0, max_evals=0, nthread=2, substeps=5))
     assert fitter.slid
     for w in fitter.logs:
         w.label = "felt"  # as if the box had only been lifted

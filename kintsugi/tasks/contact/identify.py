@@ -33,7 +33,9 @@ MIN_FELT = 8
 ON_TABLE_M = 0.004
 """The object counts as resting on the table while its tracked height stays this close to its start."""
 PINCH_N = 0.5
-"""Both finger pads feel at least this: the object is in the pinch."""
+PINCH_OPENING_M = 0.003
+"""Both finger pads feel at least PINCH_N with the fingers apart: the object is in the pinch (closed fingers
+press their pads on each other)."""
 TABLE_TOUCH_M = 0.002
 GRIND_N = 3.0
 """Fingertips this close to the table top while the wrist pushes down harder than this: grinding on it."""
@@ -65,7 +67,7 @@ def _kind(seg: list[Observation], obj: str, rest_z: float) -> str | None:
     on_table = all(abs(o.objects[obj].pos[2] - rest_z) < ON_TABLE_M for o in seg)
     if grinding and on_table:
         return "grind"
-    pinched = any(o.touch.min() > PINCH_N for o in seg)
+    pinched = any(o.touch.min() > PINCH_N and o.opening > PINCH_OPENING_M for o in seg)
     return "slide" if moving and on_table and not pinched else "felt"
 
 
