@@ -48,7 +48,8 @@ def test_words_not_task_names_choose_the_skills() -> None:
     assert [s.name for s in compose(request("Flip the box over onto its side.", [tall])).stages] == \
         ["approach", "tip", "withdraw", "settle"]
     flat_curb = compose(request("Flip the box up using the curb as a fixture.", [BOX], [WALL]))
-    assert [s.name for s in flat_curb.stages] == ["approach", "push", "rise", "pivot", "withdraw", "settle"]
+    assert [s.name for s in flat_curb.stages] == ["approach", "push", "rise", "pivot", "lift-off",
+                                                 "withdraw", "settle"]
     assert len(flat_curb.regions) == 2 and flat_curb.regions[1].center[2] > flat_curb.regions[0].center[2]
 
 
@@ -163,3 +164,38 @@ def test_push_over_the_edge_then_pick_from_below() -> None:
     tray = board.model_copy(update={"name": "tray", "label": "serving tray"})
     again = compose(request("Slide the serving tray over the edge of the table, then lift it.", [tray]))
     assert [s.name for s in again.stages] == [s.name for s in reply.stages] and "tray_hi" in again.source
+
+
+def test_the_pivot_counts_as_done_only_with_the_box_down_on_the_table() -> None:
+    """A box turned upright but balanced on the curb's top is not done (the false successes of flip-wall):
+    the pivot's own check wants it turned, still and down on the table the curb stands on."""
+    req = request("Flip the box up using the curb as a fixture.", [BOX], [WALL])
+    reply = compose(req)
+    checked, program, notes = check_formulation(reply, req, K, T)
+    assert [s.name for s in reply.stages][-3:] == ["lift-off", "withdraw", "settle"]
+    settle = reply.stages[-1]
+    assert settle.done == "settle_done" and settle.hold_s >= 1.0
+    env = sample_env(req, ())
+    on_end = np.array([1.0, 0.0, 0.0])  # up axis turned 90 degrees
+    env.update({"box_up": on_end, "box_vel": np.zeros(3), "box_spin": np.asarray(0.0)})
+    env["box_lo"] = np.array([0.15, -0.03, 0.0])
+    assert bool(program.call("settle_done", env))
+    env["box_lo"] = np.array([0.19, -0.03, 0.015])  # standing on the curb's top
+    assert not bool(program.call("settle_done", env))
+    env["box_lo"] = np.array([0.15, -0.03, 0.0])
+    env["box_up"] = np.array([0.0, 0.0, 1.0])  # still flat
+    assert not bool(program.call("settle_done", env))
+    # the lift-off and the withdraw restart their plans at their goals
+    assert program.has("lift_off_cost_seed_z") and program.has("withdraw_cost_seed_x")
+
+
+def test_a_pivot_that_did_not_come_to_rest_turns_further_and_is_not_a_dropped_grasp() -> None:
+    curb = request("Flip the box up using the curb as a fixture.", [BOX], [WALL])
+    plan = compose(curb)
+    hist = _history("settle", 1.0, 1.0).model_copy(update={"touch_lost_while_held": True})
+    areq = AdaptRequest(task=curb.task, scene=curb, beliefs=curb.priors, source=plan.source, stages=plan.stages,
+                        regions=plan.regions, knobs=plan.knobs, history=[hist], sysid=None, refine_strategy=True)
+    reply = embedded_adaptation(areq)
+    assert reply.knobs["pivot_deg"] == plan.knobs["pivot_deg"] + 10.0
+    assert reply.knobs["touch_n"] == plan.knobs["touch_n"] and "pinch" not in reply.diagnosis
+    assert reply.knobs["tip_deg"] == plan.knobs["tip_deg"]

@@ -116,10 +116,17 @@ def embedded_adaptation(req: AdaptRequest) -> AdaptReply:
             _scale(knobs, "w_tip", 1.5, notes)
         if failed == "push":
             _scale(knobs, "w_gap", 1.5, notes)
-        if last.touch_lost_while_held or failed in ("lift", "carry"):
+        names = {st.name for st in req.stages}
+        # closed fingers that push (a flip) lose touch with each other, not with a held object: only a plan that
+        # grasps can drop what it holds
+        if (last.touch_lost_while_held and "grasp" in names) or failed in ("lift", "carry"):
             why.append("The object slipped from the pinch: ask for a firmer grasp before lifting.")
             _shift(knobs, "touch_n", 1.0, 1.0, 8.0, notes)
-        if failed == "withdraw":
+        if failed in ("withdraw", "settle") and "pivot" in names:
+            why.append("The object did not come to rest turned and down on the table after the hand drew back: "
+                       "turn it further over the fixture first.")
+            _shift(knobs, "pivot_deg", 10.0, 100.0, 160.0, notes)
+        elif failed == "withdraw":
             why.append("The object was not at rest on its side when the hand drew back: tip it further first.")
             _shift(knobs, "tip_deg", 10.0, 30.0, 80.0, notes)
     if notes:

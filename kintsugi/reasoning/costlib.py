@@ -27,7 +27,7 @@ DEFAULT_KNOBS: dict[str, float] = {
     "w_press_contact": 300.0, "w_tip": 5.0,
     "clear_m": 0.025, "lift_m": 0.12, "carry_z_m": 0.14, "set_down_m": 0.004, "touch_n": 2.0,
     "push_z_m": 0.008, "push_height": 0.7, "paddle_m": 0.01, "push_speed_m_s": 0.08,
-    "tip_deg": 45.0, "pivot_deg": 100.0, "flip_deg": 75.0, "reach_tol_m": 0.012, "force_tol_n": 0.4,
+    "tip_deg": 45.0, "pivot_deg": 125.0, "reach_over_m": 0.06, "fling_m_s": 0.3, "rest_m": 0.005, "flip_deg": 75.0, "reach_tol_m": 0.012, "force_tol_n": 0.4,
     "timeout_scale": 1.0, "hold_press_s": 2.0,
     "overhang_m": 0.09, "pinch_past_edge_m": 0.035, "under_edge_z_m": -0.012, "travel_z_m": 0.07,
     "edge_lift_z_m": 0.28, "edge_touch_n": 5.0, "still_m_s": 0.03,
@@ -560,13 +560,83 @@ def _tip(plan: Plan, o: ObjectState, axis: int, sign: float, k: dict[str, float]
 
 def _pivot(plan: Plan, o: ObjectState, fixture: str, axis: int, sign: float, k: dict[str, float],
            contact: bool) -> None:
+    """Push the flat object against the fixture, then high on its back until it has turned well past upright
+    (`pivot_deg`): it falls on over the fixture instead of coming to rest balanced on the fixture's top. The hand
+    never reaches more than `reach_over_m` past the fixture's face and does not fling the object; then it rises
+    straight off (fingertips resting on the turned object would drag it back over the fixture), draws back, and
+    the attempt counts as done only when the object rests turned, still and on the table (not on the fixture)."""
+    n = o.name
     _push(plan, o, fixture, axis, sign, {**k, "timeout_scale": k["timeout_scale"]}, contact)
     plan.stages[-1] = plan.stages[-1].model_copy(update={"hold_s": 0.2})
     plan.why.pop()
-    _rise_and_turn(plan, o, axis, sign, k, contact, ("rise", "pivot"), 0.035, 0.5, 0.2, "pivot_deg", (4.0, 6.0), 0.05)
+    region = None
+    if contact:
+        plan.regions.append(back_face(o, axis, sign, k["push_height"], 0.0, k))
+        region = len(plan.regions) - 1
+        _approach(plan, "rise", o, axis, sign, f"start_{n}_lo[2] + {k['push_height']} * 2.0 * {n}_half[2]",
+                  0.035, k)
+    else:
+        _approach_blind(plan, "rise", o, k)
+    p, touch = _touch_term(o, contact, "W_CONTACT")
+    face = f"{fixture}_lo[{axis}]" if sign > 0 else f"{fixture}_hi[{axis}]"
+    plan.code.append(_sub(f'''def pivot_cost(yaw, step_change, tcp, {p}, {n}_up, {n}_vel, {fixture}_lo, {fixture}_hi):
+    """Turn the object's up axis over; while it still lies low, stay on the high contact region. The hand never
+    reaches far past the fixture's face, and the object is not flung over it."""
+    up = {n}_up[..., 2]
+    standing = 1.0 / (1.0 + exp(-(up - 0.5) / {0.2 / 3:.6f}))
+    over = relu({sign} * (tcp[..., {axis}] - {face}) - {k["reach_over_m"]})
+    fling = relu(norm({n}_vel) - {k["fling_m_s"]})
+    return (W_TIP * up + {touch} * standing + 100.0 * over + 20.0 * fling + W_YAW * 0.5 * wrap_pi(yaw) ** 2
+            + W_SMOOTH * step_change)
+
+
+def pivot_done({n}_up):
+    return {_tilt_code(n, k["pivot_deg"])}
+
+
+def turned_still({n}_up, {n}_vel, {n}_spin):
+    """Turned at least `flip_deg` and at rest."""
+    still = logical_and(norm({n}_vel) < 0.01, {n}_spin < 0.2)
+    return logical_and(still, {_tilt_code(n, k["flip_deg"])})
+
+
+def on_table({n}_lo, {fixture}_lo):
+    """Down on the table the fixture stands on, not resting on the fixture's top."""
+    return {n}_lo[2] < {fixture}_lo[2] + {k["rest_m"]}''', k))
+    plan.code.append(_sub(_hold_code("lift_off_cost", dz="0.05", seed=True), k))
+    plan.code.append('''def lift_off_done(tcp, start_tcp):
+    ex = tcp[..., 0] - start_tcp[0]
+    ey = tcp[..., 1] - start_tcp[1]
+    ez = tcp[..., 2] - start_tcp[2] - 0.05
+    return sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.012''')
+    d = ["0.0", "0.0"]
+    d[axis] = f"{-sign * 0.06}"
+    plan.code.append(_sub(_hold_code("withdraw_cost", dx=d[0], dy=d[1], seed=True), k))
+    plan.code.append(f'''def withdraw_done(tcp, start_tcp, {n}_up, {n}_vel, {n}_spin, {n}_lo, {fixture}_lo):
+    ex = tcp[..., 0] - start_tcp[0] - {d[0]}
+    ey = tcp[..., 1] - start_tcp[1] - {d[1]}
+    ez = tcp[..., 2] - start_tcp[2]
+    away = sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.015
+    rest = logical_and(turned_still({n}_up, {n}_vel, {n}_spin), on_table({n}_lo, {fixture}_lo))
+    return logical_and(away, rest)''')
+    plan.code.append(_sub(_hold_code("settle_cost"), k))
+    plan.code.append(f'''def settle_done({n}_up, {n}_vel, {n}_spin, {n}_lo, {fixture}_lo):
+    return logical_and(turned_still({n}_up, {n}_vel, {n}_spin), on_table({n}_lo, {fixture}_lo))''')
+    plan.stages += [
+        StageSpec(name="rise", cost="rise_cost", done="rise_done", grip="closed", timeout_s=_t(k, 4.0)),
+        StageSpec(name="pivot", cost="pivot_cost", done="pivot_done", grip="closed", region=region,
+                  timeout_s=_t(k, 6.0)),
+        StageSpec(name="lift-off", cost="lift_off_cost", done="lift_off_done", grip="closed", noise_scale=0.4,
+                  timeout_s=_t(k, 2.0)),
+        StageSpec(name="withdraw", cost="withdraw_cost", done="withdraw_done", grip="closed", timeout_s=_t(k, 3.0)),
+        StageSpec(name="settle", cost="settle_cost", done="settle_done", grip="closed", hold_s=1.0,
+                  timeout_s=_t(k, 3.0)),
+    ]
     plan.why.append(f"'{o.label}' lies flat and '{fixture}' stops its far edge: push it against '{fixture}', "
                     f"then push high on its back so it pivots over the fixture past {k['pivot_deg']:g} deg "
-                    "(past upright, so it does not fall back), withdraw and let it settle.")
+                    f"(well past upright, so it neither falls back nor stays balanced on top of '{fixture}'), "
+                    "lift the hand straight off, draw it back, and count it done only when the object rests "
+                    f"turned past {k['flip_deg']:g} deg, still, and down on the table.")
 
 
 def _push_over_edge(plan: Plan, o: ObjectState, k: dict[str, float], contact: bool) -> None:
