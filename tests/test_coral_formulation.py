@@ -49,7 +49,7 @@ def test_words_not_task_names_choose_the_skills() -> None:
         ["approach", "tip", "withdraw", "settle"]
     flat_curb = compose(request("Flip the box up using the curb as a fixture.", [BOX], [WALL]))
     assert [s.name for s in flat_curb.stages] == ["approach", "push", "rise", "pivot", "lift-off",
-                                                 "withdraw", "settle"]
+                                                 "withdraw", "clear", "back", "settle"]
     assert len(flat_curb.regions) == 2 and flat_curb.regions[1].center[2] > flat_curb.regions[0].center[2]
 
 
@@ -172,7 +172,7 @@ def test_the_pivot_counts_as_done_only_with_the_box_down_on_the_table() -> None:
     req = request("Flip the box up using the curb as a fixture.", [BOX], [WALL])
     reply = compose(req)
     checked, program, notes = check_formulation(reply, req, K, T)
-    assert [s.name for s in reply.stages][-3:] == ["lift-off", "withdraw", "settle"]
+    assert [s.name for s in reply.stages][-5:] == ["lift-off", "withdraw", "clear", "back", "settle"]
     settle = reply.stages[-1]
     assert settle.done == "settle_done" and settle.hold_s >= 1.0
     env = sample_env(req, ())
@@ -185,6 +185,10 @@ def test_the_pivot_counts_as_done_only_with_the_box_down_on_the_table() -> None:
     env["box_lo"] = np.array([0.15, -0.03, 0.0])
     env["box_up"] = np.array([0.0, 0.0, 1.0])  # still flat
     assert not bool(program.call("settle_done", env))
+    # a box on the curb's top is pushed on off it; one already on the table needs nothing more
+    assert bool(program.call("clear_done", env))
+    env["box_lo"] = np.array([0.19, -0.03, 0.015])
+    assert not bool(program.call("clear_done", env))
     # the lift-off and the withdraw restart their plans at their goals
     assert program.has("lift_off_cost_seed_z") and program.has("withdraw_cost_seed_x")
 

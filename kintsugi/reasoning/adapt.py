@@ -122,7 +122,7 @@ def embedded_adaptation(req: AdaptRequest) -> AdaptReply:
         if (last.touch_lost_while_held and "grasp" in names) or failed in ("lift", "carry"):
             why.append("The object slipped from the pinch: ask for a firmer grasp before lifting.")
             _shift(knobs, "touch_n", 1.0, 1.0, 8.0, notes)
-        if failed in ("withdraw", "settle") and "pivot" in names:
+        if failed in ("withdraw", "clear", "back", "settle") and "pivot" in names:
             why.append("The object did not come to rest turned and down on the table after the hand drew back: "
                        "turn it further over the fixture first.")
             _shift(knobs, "pivot_deg", 10.0, 100.0, 160.0, notes)

@@ -612,13 +612,39 @@ def on_table({n}_lo, {fixture}_lo):
     d = ["0.0", "0.0"]
     d[axis] = f"{-sign * 0.06}"
     plan.code.append(_sub(_hold_code("withdraw_cost", dx=d[0], dy=d[1], seed=True), k))
-    plan.code.append(f'''def withdraw_done(tcp, start_tcp, {n}_up, {n}_vel, {n}_spin, {n}_lo, {fixture}_lo):
+    plan.code.append(f'''def withdraw_done(tcp, start_tcp, {n}_up, {n}_vel, {n}_spin):
     ex = tcp[..., 0] - start_tcp[0] - {d[0]}
     ey = tcp[..., 1] - start_tcp[1] - {d[1]}
     ez = tcp[..., 2] - start_tcp[2]
     away = sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.015
-    rest = logical_and(turned_still({n}_up, {n}_vel, {n}_spin), on_table({n}_lo, {fixture}_lo))
-    return logical_and(away, rest)''')
+    return logical_and(away, turned_still({n}_up, {n}_vel, {n}_spin))''')
+    # an object that came to rest on the fixture's top is pushed on, over the fixture's far side, to the table
+    near_end, back = (f"{n}_lo", "-") if sign > 0 else (f"{n}_hi", "+")
+    far = f"{fixture}_hi[{axis}]" if sign > 0 else f"{fixture}_lo[{axis}]"
+    other = 1 - axis
+    plan.code.append(_sub(f'''def clear_cost(tcp, yaw, step_change, {n}_lo, {n}_hi, {n}_pos, {fixture}_lo, {fixture}_hi):
+    """Behind the object's near end at its centre's height, pushing until its centre is past the fixture's far
+    side (it then drops off the fixture onto the table); the hand never reaches far past the fixture's face."""
+    ea = tcp[..., {axis}] - ({near_end}[..., {axis}] {back} {k["paddle_m"]})
+    eb = tcp[..., {other}] - {n}_pos[..., {other}]
+    ez = tcp[..., 2] - {n}_pos[..., 2]
+    off = relu({sign} * ({far} - {n}_pos[..., {axis}]) + 0.01)
+    over = relu({sign} * (tcp[..., {axis}] - {face}) - {k["reach_over_m"]})
+    return (W_GAP * off + W_CONTACT * sqrt(ea ** 2 + eb ** 2 + ez ** 2) + 100.0 * over
+            + W_YAW * 0.5 * wrap_pi(yaw) ** 2 + W_SMOOTH * step_change)
+
+
+def clear_done({n}_lo, {fixture}_lo):
+    return on_table({n}_lo, {fixture}_lo)''', k))
+    plan.code.append(_sub(_hold_code("back_cost", dx=d[0], dy=d[1], seed=True), k))
+    plan.code.append(f'''def back_done(tcp, start_tcp, {n}_lo, {n}_hi):
+    """Drawn back, or already well clear of the object's near end (nothing was pushed)."""
+    ex = tcp[..., 0] - start_tcp[0] - {d[0]}
+    ey = tcp[..., 1] - start_tcp[1] - {d[1]}
+    ez = tcp[..., 2] - start_tcp[2]
+    away = sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.015
+    clear = {sign} * ({near_end}[{axis}] - tcp[{axis}]) > 0.04
+    return logical_or(away, clear)''')
     plan.code.append(_sub(_hold_code("settle_cost"), k))
     plan.code.append(f'''def settle_done({n}_up, {n}_vel, {n}_spin, {n}_lo, {fixture}_lo):
     return logical_and(turned_still({n}_up, {n}_vel, {n}_spin), on_table({n}_lo, {fixture}_lo))''')
@@ -629,13 +655,16 @@ def on_table({n}_lo, {fixture}_lo):
         StageSpec(name="lift-off", cost="lift_off_cost", done="lift_off_done", grip="closed", noise_scale=0.4,
                   timeout_s=_t(k, 2.0)),
         StageSpec(name="withdraw", cost="withdraw_cost", done="withdraw_done", grip="closed", timeout_s=_t(k, 3.0)),
+        StageSpec(name="clear", cost="clear_cost", done="clear_done", grip="closed", timeout_s=_t(k, 4.0)),
+        StageSpec(name="back", cost="back_cost", done="back_done", grip="closed", timeout_s=_t(k, 2.0)),
         StageSpec(name="settle", cost="settle_cost", done="settle_done", grip="closed", hold_s=1.0,
                   timeout_s=_t(k, 3.0)),
     ]
     plan.why.append(f"'{o.label}' lies flat and '{fixture}' stops its far edge: push it against '{fixture}', "
                     f"then push high on its back so it pivots over the fixture past {k['pivot_deg']:g} deg "
                     f"(well past upright, so it neither falls back nor stays balanced on top of '{fixture}'), "
-                    "lift the hand straight off, draw it back, and count it done only when the object rests "
+                    "lift the hand straight off, draw it back, push it on off the fixture's top if it came to rest there, "
+                    "and count it done only when the object rests "
                     f"turned past {k['flip_deg']:g} deg, still, and down on the table.")
 
 
