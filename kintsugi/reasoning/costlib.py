@@ -298,6 +298,18 @@ def descend_cost(tcp, yaw, step_change, {n}_pos, start_{n}_lo, finger_length, {n
     return W_REACH * sqrt(exy ** 2 + ez ** 2) + 2.0 * W_REACH * exy + W_YAW * wrap_pi(yaw - start_yaw) ** 2 + W_SMOOTH * step_change
 
 
+def descend_cost_seed_x(start_{n}_pos):
+    return start_{n}_pos[0]
+
+
+def descend_cost_seed_y(start_{n}_pos):
+    return start_{n}_pos[1]
+
+
+def descend_cost_seed_z(start_{n}_lo, {n}_half, finger_length):
+    return start_{n}_lo[2] + {n}_grasp_z({n}_half, finger_length)
+
+
 def descend_done(tcp, {n}_pos, start_{n}_lo, {n}_half, finger_length):
     ex = tcp[..., 0] - {n}_pos[..., 0]
     ey = tcp[..., 1] - {n}_pos[..., 1]
@@ -320,7 +332,10 @@ def lift_done(touch, {n}_pos, start_{n}_pos):
     plan.stages += [
         StageSpec(name="reach", cost="reach_cost", done="reach_done", grip=f"{n}_open", keep=f"{n}_aim",
                   timeout_s=_t(k, 5.0)),
-        StageSpec(name="descend", cost="descend_cost", done="descend_done", grip=f"{n}_open", timeout_s=_t(k, 4.0)),
+        # restarted at the grasp point with fine sampling noise (as the expert's descent): centimetre jitter here
+        # puts a finger on an edge and shoves the object or a neighbour away
+        StageSpec(name="descend", cost="descend_cost", done="descend_done", grip=f"{n}_open", noise_scale=0.35,
+                  timeout_s=_t(k, 4.0)),
         StageSpec(name="grasp", cost="grasp_cost", done="grasp_done", grip="closed", hold_s=0.2,
                   timeout_s=_t(k, 2.0)),
         StageSpec(name="lift", cost="lift_cost", done="lift_done", grip="closed", timeout_s=_t(k, 4.0)),
@@ -369,11 +384,13 @@ def lower_done(tcp, start_tcp, start_{n}_pos, {n}_half, {marker}_xy):
     plan.code.append('''def release_done(opening, touch, max_opening):
     return logical_and(opening > 0.8 * max_opening, max(touch, axis=-1) < 0.1)''')
     plan.code.append(_sub(_hold_code("withdraw_up_cost", dz="0.08"), k))
-    plan.code.append('''def withdraw_up_done(tcp, start_tcp):
+    plan.code.append(f'''def withdraw_up_done(tcp, touch, start_tcp, {n}_pos, {marker}_xy, {marker}_radius):
+    """Up and away, the fingers off the object, and the object left on the goal (one that slid off is not done)."""
     ex = tcp[..., 0] - start_tcp[0]
     ey = tcp[..., 1] - start_tcp[1]
     ez = tcp[..., 2] - start_tcp[2] - 0.08
-    return sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.015''')
+    on_goal = logical_and(norm({n}_pos[:2] - {marker}_xy) < {marker}_radius, max(touch, axis=-1) < 0.1)
+    return logical_and(sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.015, on_goal)''')
     plan.stages += [
         StageSpec(name="carry", cost="carry_cost", done="carry_done", grip="closed", timeout_s=_t(k, 5.0)),
         StageSpec(name="lower", cost="lower_cost", done="lower_done", grip="closed", timeout_s=_t(k, 4.0)),
