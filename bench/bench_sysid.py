@@ -46,13 +46,13 @@ CONVERGED = 0.05
 
 def coral_prior(ctx) -> dict:  # noqa: ANN001 - a ContactContext
     """The physics-priors role's guess, from the labels and known sizes only (as coral asks it)."""
+    from kintsugi.methods.coral.method import object_views
     from kintsugi.reasoning import make_reasoner
-    from kintsugi.reasoning.coral_types import ObjectView, PriorsRequest
+    from kintsugi.reasoning.coral_types import PriorsRequest
     from kintsugi.reasoning.priors import ask_priors
     from kintsugi.tasks.contact.objects import Physics
 
-    views = [ObjectView(label=n, size_m=tuple(2 * h for h in g.parts[0].half)) for n, g in ctx.known.geometry.items()]
-    reply, _ = ask_priors(make_reasoner(ctx.reasoner), PriorsRequest(task=ctx.task_text, objects=views))
+    reply, _ = ask_priors(make_reasoner(ctx.reasoner), PriorsRequest(task=ctx.task_text, objects=object_views(ctx.known)))
     return {k: Physics(mass_kg=v.mass_kg, friction=v.friction) for k, v in reply.objects.items()}
 
 

@@ -12,6 +12,8 @@ from kintsugi.tasks.contact.objects import board
 from kintsugi.tasks.contact.spec import corners
 from kintsugi.tasks.contact.world import rotate
 
+from tests.coral_fixtures import coral_scene
+
 
 def _poses(seed: int) -> tuple[np.ndarray, np.ndarray]:
     rng = np.random.default_rng(seed)
@@ -39,20 +41,9 @@ def test_contact_distance_equals_the_attractor() -> None:
 
 
 def test_a_measured_state_provides_every_listed_variable() -> None:
-    import kintsugi.tasks.contact.tasks  # noqa: F401
-    from kintsugi.methods.coral.method import VARIANTS, Coral
     from kintsugi.reasoning.formulate import request_variables
-    from kintsugi.tasks import TASKS
-    from kintsugi.tasks.contact.robot import ContactRobot
-    from kintsugi.trial import TrialSpec
 
-    task = TASKS.get("push-force").factory()
-    cfg = task.config({})
-    world, _, setup = task.build(cfg, "all", 0)
-    ctx = task.context(cfg, setup, False, TrialSpec(task="push-force", method="coral", variant="default",
-                                                    condition="all", seed=0))
-    obs = ContactRobot(world).observe()
-    req = Coral(ctx, VARIANTS["coral"]).scene_request(obs, {})
+    ctx, cfg, obs, req, world = coral_scene("push-force", 0)
     a = Attractor(ContactRegion(obj="box", center=(-0.03, 0, 0), normal=(-1, 0, 0), radius=0.01), 4)
     env = state_env(obs, ctx.known, {**static_env(ctx.known, cfg), **entry_env(obs, ctx.known), "kept": 0.0}, a, 0.1)
     assert request_variables(req) <= set(env)

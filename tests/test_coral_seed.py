@@ -15,22 +15,12 @@ from kintsugi.reasoning.costlib import DEFAULT_KNOBS, compose
 from kintsugi.reasoning.formulate import request_variables
 from kintsugi.sandbox import CostProgram
 
+from tests.coral_fixtures import coral_scene
+
 
 @pytest.fixture(scope="module")
-def board_trial():  # noqa: ANN201 - (ctx, cfg, obs, request, world)
-    import kintsugi.tasks.contact.tasks  # noqa: F401
-    from kintsugi.methods.coral.method import VARIANTS, Coral
-    from kintsugi.tasks import TASKS
-    from kintsugi.tasks.contact.robot import ContactRobot
-    from kintsugi.trial import TrialSpec
-
-    task = TASKS.get("push-pick-board").factory()
-    cfg = task.config({})
-    world, _, setup = task.build(cfg, "all", 3)
-    ctx = task.context(cfg, setup, False, TrialSpec(task="push-pick-board", method="coral", variant="default",
-                                                    condition="all", seed=3))
-    obs = ContactRobot(world).observe()
-    req = Coral(ctx, VARIANTS["coral"]).scene_request(obs, {})
+def board_trial():  # noqa: ANN201 - (ctx, cfg, obs, request)
+    ctx, cfg, obs, req, world = coral_scene("push-pick-board", 3)
     yield ctx, cfg, obs, req
     world.close()
 

@@ -103,9 +103,7 @@ class MPPISysId:
             added = fitter.add(robot.new_log())
             phys, fit = fitter.fit()
             self._note(planning, obj)
-            log.event(robot.sim_time, "sysid", f"{added} new windows ({len(fitter.logs)} in all): {obj} mass "
-                      f"{phys.mass_kg:.3f} kg, friction {phys.friction:.3f} (loss {fit.prior_loss:.3g} -> {fit.loss:.3g})"
-                  + ("" if fitter.slid else "; friction kept: the object never slid on the table"))
+            log.event(robot.sim_time, "sysid", fitter.story(added, phys, fit))
         return False
 
     def _note(self, planning: Any, obj: str) -> None:

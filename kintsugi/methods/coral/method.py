@@ -37,6 +37,13 @@ def probe_limits() -> Any:
     return ProbeLimits(wall_s=60.0)
 
 
+def object_views(known: Any) -> list[Any]:
+    """What the priors role is told of each object: its label and the size of its known model."""
+    from kintsugi.reasoning.coral_types import ObjectView
+
+    return [ObjectView(label=n, size_m=tuple(2 * h for h in g.parts[0].half)) for n, g in known.geometry.items()]
+
+
 @dataclass(frozen=True)
 class Variant:
     name: str
@@ -105,7 +112,7 @@ class Coral:
         return c.samples, max(1, round(c.horizon_s / self.ctx.cfg.sim.planning_timestep_s))
 
     def _run(self, robot: Any, log: TrialLog, reasoner: Any) -> bool:
-        from kintsugi.reasoning.coral_types import ObjectView, PriorsRequest
+        from kintsugi.reasoning.coral_types import PriorsRequest
         from kintsugi.reasoning.formulate import ask_formulation
         from kintsugi.reasoning.priors import ask_priors
         from kintsugi.tasks.contact.objects import Physics
@@ -113,7 +120,7 @@ class Coral:
 
         ctx, cfg = self.ctx, self.ctx.cfg
         obs = robot.observe()
-        views = [ObjectView(label=n, size_m=tuple(2 * h for h in g.parts[0].half)) for n, g in ctx.known.geometry.items()]
+        views = object_views(ctx.known)
         # No camera image: the contact robot has no image API yet, so the roles get labels, sizes and poses only.
         priors, notes = ask_priors(reasoner, PriorsRequest(task=ctx.task_text, objects=views))
         beliefs = dict(priors.objects)
@@ -202,9 +209,7 @@ class Coral:
         except KintsugiError as exc:
             log.event(self._now, "sysid", f"no fit: {exc}"[:200])
             return None
-        log.event(self._now, "sysid", f"{added} new windows ({len(fitter.logs)} in all): {obj} "
-                  f"{phys.mass_kg:.3f} kg, friction {phys.friction:.3f} (loss {fit.prior_loss:.3g} -> {fit.loss:.3g})"
-                  + ("" if fitter.slid else "; friction kept: the object never slid on the table"))
+        log.event(self._now, "sysid", fitter.story(added, phys, fit))
         return SysIdSummary(object=obj, mass_kg=phys.mass_kg, friction=phys.friction, loss_prior=fit.prior_loss,
                             loss_fit=fit.loss, windows=len(fitter.logs))
 

@@ -89,10 +89,9 @@ def windows(planning: PlanningWorld, log: ExecutionLog, obj: str, ticks: int = W
         if kind in picked:
             picked[kind].append(i)
     slides = _thinned(picked["slide"], MAX_WINDOWS - min(MIN_FELT, len(picked["felt"])))
-    starts = sorted(slides + _thinned(picked["felt"], MAX_WINDOWS - len(slides)))
+    kinds = {i: "felt" for i in _thinned(picked["felt"], MAX_WINDOWS - len(slides))} | {i: "slide" for i in slides}
     out: list[ReplayLog] = []
-    for i in starts:
-        kind = "slide" if i in slides else "felt"
+    for i, kind in sorted(kinds.items()):
         seg = log.obs[i:i + ticks + 1]
         start = seg[0]
         data = planning.sync(start.ee, start.ee_vel, start.fingers, start.finger_vel,
@@ -149,6 +148,12 @@ class BeliefFitter:
         the table left no trace (a lift or a grinding push does not show it), so the fit keeps the belief
         rather than report whatever a flat loss happens to favour."""
         return any(w.label == "slide" for w in self.logs)
+
+    def story(self, added: int, phys: Physics, result: SysIdResult) -> str:
+        """One line for the trial's events: what the last fit saw and found."""
+        return (f"{added} new windows ({len(self.logs)} in all): {self.obj} mass {phys.mass_kg:.3f} kg, friction "
+                f"{phys.friction:.3f} (loss {result.prior_loss:.3g} -> {result.loss:.3g})"
+                + ("" if self.slid else "; friction kept: the object never slid on the table"))
 
     def fit(self) -> tuple[Physics, SysIdResult]:
         """Fit on every window so far and write the beliefs into the planning world (all the object's geoms).
