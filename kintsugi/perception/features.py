@@ -13,6 +13,7 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Literal
 
+import cv2
 import numpy as np
 from pydantic import Field
 
@@ -35,6 +36,7 @@ __all__ = [
     "object_clouds",
     "render_view",
     "see_through",
+    "see_through_shares",
     "sign_normalized",
 ]
 
@@ -126,16 +128,32 @@ def see_through(fit: Fit, views: Sequence[tuple[CameraModel, np.ndarray, np.ndar
     A shape can match the visible points and still claim space the cameras saw
     empty (a too-big cylinder on a box, a bottle fitted upside down on its cap).
     """
+    return see_through_shares(fit, views, cfg)[1]
+
+
+def see_through_shares(fit: Fit, views: Sequence[tuple[CameraModel, np.ndarray, np.ndarray]], cfg: FeatureConfig
+                       ) -> tuple[float, float]:
+    """(share seen through in its pixel and all eight around it, share seen through in its own pixel).
+
+    The first decides whether a fit is refused: a cup's 5 mm rim is a pixel or two
+    wide from above, so a sample inside the wall often lands in the next pixel,
+    which looks into the cavity (5.5 % of a perfect fit's surface on one pour-dual
+    seed, where wrong fits score 12 % or more). The second ranks the fits that
+    pass: a container fitted one wall thickness off is told apart only pixel by pixel.
+    """
     pts = surface_samples(fit, cfg.inlier_tol)
-    seen = bad = 0
+    seen = bad_near = bad = 0
     for cam, depth, _ in views:
         z = -((pts - cam.pos) @ cam.xmat[:, 2])
         pix = np.floor(cam.project(pts)).astype(np.int64)
         ok = (z > 1e-6) & (pix[:, 0] >= 0) & (pix[:, 0] < cam.width) & (pix[:, 1] >= 0) & (pix[:, 1] < cam.height)
-        rendered = np.asarray(depth)[pix[ok, 1], pix[ok, 0]]
+        d = np.asarray(depth, dtype=np.float32)
+        nearest = cv2.erode(d, np.ones((3, 3), np.uint8))  # the 3x3 minimum
+        limit = z[ok] + cfg.see_through_tol
         seen += int(ok.sum())
-        bad += int(np.count_nonzero(rendered > z[ok] + cfg.see_through_tol))
-    return bad / seen if seen else 0.0
+        bad += int(np.count_nonzero(d[pix[ok, 1], pix[ok, 0]] > limit))
+        bad_near += int(np.count_nonzero(nearest[pix[ok, 1], pix[ok, 0]] > limit))
+    return (bad_near / seen, bad / seen) if seen else (0.0, 0.0)
 
 
 def _box_axis_defined(size: np.ndarray, min_elongation: float) -> bool:
@@ -180,7 +198,7 @@ def features(
     else:
         s = FitSettings(inlier_tol=cfg.inlier_tol)
         q = p[np.linspace(0, n - 1, cfg.fit_points).round().astype(np.int64)] if n > cfg.fit_points else p
-        seen = (lambda f: see_through(f, views, cfg)) if views else None
+        seen = (lambda f: see_through_shares(f, views, cfg)) if views else None
         fit, rejected = fit_primitive(q, primitive, axes, s, seen, cfg.max_see_through)  # type: ignore[arg-type]
         if fit is None:
             note = f"{kind} fit contradicts the views" if rejected else f"{kind} fit did not converge"

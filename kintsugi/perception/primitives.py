@@ -234,7 +234,8 @@ def _good(f: Fit, s: FitSettings) -> bool:
 
 
 UP = np.array([0.0, 0.0, 1.0])
-Contradiction = Callable[[Fit], float]
+Contradiction = Callable[[Fit], "float | tuple[float, float]"]
+"""How much other evidence contradicts a fit: one share, or (share that refuses it, share that ranks it)."""
 
 
 def _rim_start(p: np.ndarray, a: np.ndarray, depth: float, radius: float | None = None, band: float = 0.005) -> np.ndarray:
@@ -389,8 +390,9 @@ def fit_primitive(
             if fit is None:
                 continue
             c = contradiction(fit) if contradiction is not None else 0.0
+            refuse, c = c if isinstance(c, tuple) else (c, c)
             tried.append((fit, c))
-            if c <= max_contradiction:
+            if refuse <= max_contradiction:
                 accepted.append((fit, c))
                 if _good(fit, s) and c <= max_contradiction / 2:
                     return True
