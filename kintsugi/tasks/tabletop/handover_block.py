@@ -4,8 +4,8 @@ places it in the target region (paper, appendix B).
 Success (appendix B: "transferred between arms and placed within the target region without
 being dropped"; every criterion "satisfied at the end of execution"): the block was held by both
 grippers at once at some instant (the handover), then by the right alone; its last release was a
-place, not a drop: the right gripper let it go with it at most `PLACED_ABOVE_M` above its resting
-height; it rests flat on the table, its centre inside `targets.block`, at rest and released.
+place, not a drop: the right gripper let it go with its lowest corner at most `PLACED_ABOVE_M`
+above the table; it rests flat on the table, its centre inside `targets.block`, at rest and released.
 
 A drop on the way (injected, or the handover fumbled) that the method picks up and recovers from
 does not fail the trial, as in the other tasks; the details count it (`drops`). A block that
@@ -39,7 +39,7 @@ DROP_TICKS = 5
 """Touching neither gripper, off the table, for this many control ticks in a row is a drop
 (a single tick without a pad contact is the contact solver flickering, not a fall)."""
 PLACED_ABOVE_M = 0.01
-"""A release with the block's centre at most this far above its resting height is a place; higher is a drop."""
+"""A release with the block's lowest corner at most this far above the table is a place; higher is a drop."""
 
 
 def script(obs: Any) -> list[dict[str, Any]]:
@@ -68,7 +68,7 @@ class HandoverDetails(StrictModel):
     placed: bool
     """The last release was the right gripper's, near the table: a place, not a drop."""
     release_height_m: float | None
-    """The block's centre above its resting height at its last release (None: never released after the pick)."""
+    """The block's lowest corner above the table at its last release (None: never released after the pick)."""
     flat: bool
     in_region: bool
     offset_m: tuple[float, float]
@@ -87,7 +87,8 @@ def _flat(truth: GroundTruth, obj: str, rest_h: float, tol_deg: float) -> bool:
 class HandoverScorer:
     def __init__(self, cfg: TabletopConfig) -> None:
         self.cfg = cfg
-        self.rest_h = shape_of("block", cfg.objects).rest_height
+        shape = shape_of("block", cfg.objects)
+        self.rest_h, self.half = shape.rest_height, np.asarray(shape.half_extents)
         self.picked = self.both = self.right_alone = False
         self.drops = 0
         self._free_ticks = 0
@@ -107,7 +108,8 @@ class HandoverScorer:
         if not free:
             self._holder = "right" if "block" not in left else "left" if "block" not in right else "both"
         elif self._holder is not None and self.picked:
-            self.release = (self._holder, z - self.rest_h)
+            tilt = np.abs(world.data.xmat[world.bodies["block"]].reshape(3, 3)[2, :])
+            self.release = (self._holder, z - float(tilt @ self.half))  # the table top is z = 0
             self._holder = None
         self._free_ticks = self._free_ticks + 1 if (self.picked and off_table and free) else 0
         self.drops += self._free_ticks == DROP_TICKS
