@@ -12,6 +12,7 @@ from typing import Any
 
 from pydantic import TypeAdapter, ValidationError
 
+from kintsugi.reasoning.composer import looks_upright
 from kintsugi.reasoning.jsontext import BadReply
 from kintsugi.reasoning.taskgraph_types import VerifyReply, VerifyRequest
 from kintsugi.taskgraph.constraints import Constraint
@@ -29,6 +30,10 @@ class _Seen:
 
     def __init__(self, o: Any) -> None:
         self.centroid, self.axis, self.n_points, self.extremes = o.centroid, o.axis, o.n_points, o.extremes
+        if self.axis is None and looks_upright(o):
+            # No axis (a cube): upright by the composer's own rule, so a planned "upright" reads as met, as a
+            # look at a cube held face down would; not "unseen", which failed DoReMi's every check on the block.
+            self.axis = (0.0, 0.0, 1.0)
 
 
 def features_of(request: VerifyRequest) -> Features:
