@@ -38,7 +38,7 @@ def compile_once(task, robot, cfg):  # noqa: ANN001, ANN201
     t0 = time.perf_counter()
     obs = robot.observation(images=False)
     t1 = time.perf_counter()
-    compiled = compile_graph(reasoner, task.spec, obs)
+    compiled = compile_graph(reasoner, task.spec, obs, cfg=cfg)
     AgentChord._compile_keyframes(compiled, TabletopKeyframes(cfg), obs)
     t2 = time.perf_counter()
     return compiled, t1 - t0, t2 - t1
