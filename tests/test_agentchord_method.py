@@ -35,7 +35,8 @@ def test_a_drop_runs_the_precompiled_forward_recovery() -> None:
     assert fired and "drop" in fired[0] and "re.e2_lift.drop.right.0" in fired[0]  # the hub: where did it land?
     assert r.transitions == [("e2_lift", "re.e2_lift.drop.right.0")]
     rec = [s.skill for s in r.skills if s.recovery]
-    assert rec[-2:] == ["grasp", "move_by_offset"] and set(rec[:-2]) <= {"open_gripper"}
+    # The hub lets the bottle come to rest and backs the emptied hand away home before the re-grasp.
+    assert rec[-3:] == ["back", "grasp", "move_by_offset"] and set(rec[:-3]) <= {"open_gripper"}
     m = metrics_of(r)
     assert m.recoveries == 1 and m.recovery_latency_steps == [0] and m.runtime_reasoning_calls == 0
     assert r.success and r.framework_success

@@ -31,6 +31,11 @@ TABLE_CLEARANCE_M = 0.004
 HOVER_CLEARANCE_M = 0.04
 """The fingers pass this far above an object's top on their way to its pre-grasp pose."""
 FLAT_TILT_DEG = 45.0
+BRANCH_JUMP_DEG = 45.0
+"""Between two waypoints of a straight line (at most LINEAR_STEP_M / LINEAR_STEP_RAD apart) no joint turns
+this far unless the IK solution left the arm's branch (a wrist flip: the seeded solve met a joint limit and
+the one from home won). The joint-space move between such waypoints is no straight line: it swings the hand
+through a half turn."""
 
 AXES = {"normal": 0, "closing": 1, "approach": 2}
 
@@ -108,6 +113,30 @@ class Planner:
         duration = max(dist / m.linear_speed_m_s, math.degrees(angle) / m.rotate_speed_deg_s)
         return Move(qs, min_duration_s=duration, tcp=(p1, r1), label=label)
 
+    def _linear_prefix(self, arm: str, start: tuple[np.ndarray, np.ndarray], goal: tuple[np.ndarray, np.ndarray],
+                       seed: np.ndarray, label: str) -> Move | None:
+        """As much of a straight line as the arm follows on its own branch: the waypoints up to the first one
+        that is unreachable or leaves the branch (BRANCH_JUMP_DEG); None when not even the first is. For moves
+        that may stop short (backing an open hand away) and must never swing it."""
+        p0, r0 = start
+        p1, r1 = goal
+        angle = Rotation.from_matrix(r0.T @ r1).magnitude()
+        dist = float(np.linalg.norm(p1 - p0))
+        n = max(1, math.ceil(dist / LINEAR_STEP_M), math.ceil(angle / LINEAR_STEP_RAD))
+        slerp = Slerp([0.0, 1.0], Rotation.from_matrix(np.stack([r0, r1])))
+        qs, q, s = [], seed, 0.0
+        for i in range(1, n + 1):
+            r = self.iks[arm].solve(p0 + i / n * (p1 - p0), slerp(i / n).as_matrix(), q)
+            if not r.ok or r.clipped or np.degrees(np.abs(r.q - q)).max() > BRANCH_JUMP_DEG:
+                break
+            q, s = r.q, i / n
+            qs.append(q)
+        if not qs:
+            return None
+        m = self.cfg.motion
+        duration = max(s * dist / m.linear_speed_m_s, s * math.degrees(angle) / m.rotate_speed_deg_s)
+        return Move(qs, min_duration_s=duration, tcp=(p0 + s * (p1 - p0), slerp(s).as_matrix()), label=label)
+
     def _joint(self, arm: str, pos: np.ndarray, rot: np.ndarray, seed: np.ndarray, what: str, label: str) -> Move:
         return Move([self._solve(arm, pos, rot, seed, what)], tcp=(pos, rot), label=label)
 
@@ -153,7 +182,13 @@ class Planner:
 
     def _back(self, a: A.Back, arm: ArmView, feats: dict) -> list[Step]:
         home = self.iks[a.arm].home
-        return [Move([home.copy()], tcp=self.iks[a.arm].fk(home), label="home")]
+        steps: list[Step] = []
+        if a.retreat_m > 0.0:
+            out = self._linear_prefix(a.arm, (arm.pos, arm.rot), (arm.pos - a.retreat_m * arm.rot[:, 2], arm.rot),
+                                      arm.q, "back away")
+            if out is not None:
+                steps.append(out)
+        return steps + [Move([home.copy()], tcp=self.iks[a.arm].fk(home), label="home")]
 
     def _move_to_target(self, a: A.MoveToTarget, arm: ArmView, feats: dict) -> list[Step]:
         rot = rpy_matrix(a.rpy_deg) if a.rpy_deg is not None else arm.rot
@@ -237,6 +272,8 @@ class Planner:
         q_over = self._solve(a.arm, over, rot, arm.q, "the pose over the place")
         lower = self._linear(a.arm, (over, rot), (low, rot), q_over, "the place pose", "lower")
         retreat_pos = low - self.cfg.motion.retreat_m * rot[:, 2]
-        retreat = self._linear(a.arm, (low, rot), (retreat_pos, rot), lower.waypoints[-1], "the retreat pose",
-                               "retreat")
-        return [Move([q_over], tcp=(over, rot), label="over place"), lower, Grip(False, "release"), retreat]
+        # Back away only as far as the line holds on the arm's branch: a wrist flip on the way swings the open
+        # fingers through the object just set down (the released hand may stop short; it is open and empty).
+        retreat = self._linear_prefix(a.arm, (low, rot), (retreat_pos, rot), lower.waypoints[-1], "retreat")
+        return [Move([q_over], tcp=(over, rot), label="over place"), lower, Grip(False, "release"),
+                *([retreat] if retreat is not None else [])]
