@@ -17,7 +17,18 @@ GRASP_Z_MIN_M = 0.029
 """A top-down grasp point is no lower than this (the pads' half length plus the table clearance)."""
 UPRIGHT_SWINGS_DEG = (0.0, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0)
 """Standing a held object up: the hand faces away from the shoulder, or swung this far about the vertical."""
+JOINT_MARGIN_DEG = 30.0
+"""A turn that stands a held object up should leave every joint this far inside its limits: the place that
+follows moves the base and turns the wrist's last roll with it (a roll left at its limit made the place's
+retreat flip the wrist and knock the bottle it had just stood up over)."""
 
+
+
+def _down(yaw: float) -> np.ndarray:
+    """The gripper pointing down, its x axis along `yaw` (planning's `down_rotation`)."""
+    from kintsugi.tasks.tabletop.planning import down_rotation
+
+    return down_rotation(yaw)
 
 
 def region_centre(c: Any) -> tuple[float, float]:
@@ -45,7 +56,8 @@ class EdgeSynthesis:
         if name == "rotate_eef" and call.get("axis") == "approach":
             call = self._heading_call(edge, call)
         if name == "grasp" and call.get("yaw_deg") is None and call.get("grasp_offset") is None:
-            call = self._grasp_call(call)
+            stand = self._stand_grasp_call(edge, call)
+            call = stand if stand is not None else self._grasp_call(call)
         return call
 
     def _wants_upright(self, edge: Edge) -> bool:
@@ -53,7 +65,9 @@ class EdgeSynthesis:
 
     def _upright_call(self, call: dict) -> dict:
         """Edge synthesis (Eq. 10) of a turn toward an upright sub-goal: the hand orientation that puts the held
-        object's known top up, level and facing away from the shoulder; as given when nothing held has a top."""
+        object's known top up, level and facing away from the shoulder; as given when nothing held has a top.
+        Of the facings, the first whose whole turn the arm follows on its own branch (every waypoint's IK, no
+        wrist flip) and that leaves its joints inside their limits; else the first whose end the arm reaches."""
         from scipy.spatial.transform import Rotation
 
         from kintsugi.methods.agentchord.tops import hand_rotation
@@ -61,16 +75,91 @@ class EdgeSynthesis:
         arm = call["arm"]
         state = self.robot.arm_state(arm)
         ik, pos, rot = self.keyframes.iks[arm], np.array(state.tcp_pos), hand_rotation(state)
-        turn = None
-        for swing in UPRIGHT_SWINGS_DEG:  # the first facing the arm reaches (its IK, checked before moving)
+        q = np.radians(state.joints_deg)
+        turns = []
+        for swing in UPRIGHT_SWINGS_DEG:
             turn = self.tops.upright_turn(arm, state, self.keyframes.shoulders[arm], swing)
             if turn is None:
                 return call
-            if ik.solve(pos, turn @ rot, np.radians(state.joints_deg)).ok:
-                break
-        rpy = Rotation.from_matrix(turn).as_euler("xyz", degrees=True)
+            turns.append(turn)
+        good = next((t for t in turns if self._turn_margin(arm, q, pos, rot, t @ rot) >= JOINT_MARGIN_DEG), None)
+        if good is None:
+            good = next((t for t in turns if ik.solve(pos, t @ rot, q).ok), turns[-1])
+        rpy = Rotation.from_matrix(good).as_euler("xyz", degrees=True)
         return {"action": "move_by_offset", "arm": arm, "dxyz": (0.0, 0.0, 0.0), "frame": "world",
                 "drpy_deg": tuple(round(float(v), 3) for v in rpy)}
+
+    def _turn_margin(self, arm: str, q: np.ndarray, pos: np.ndarray, rot: np.ndarray, goal: np.ndarray) -> float:
+        """How far inside its limits (degrees, the tightest joint) the arm ends a straight turn of the hand from
+        `rot` to `goal` about `pos`, starting from joints `q`; -inf when it cannot follow it on its branch."""
+        from kintsugi.errors import KintsugiError
+        from kintsugi.tasks.tabletop.planning import BRANCH_JUMP_DEG, Planner
+
+        ik = self.keyframes.iks[arm]
+        try:
+            move = Planner(self.keyframes.cfg, self.keyframes.iks, {})._linear(arm, (pos, rot), (pos, goal), q,
+                                                                               "the turn", "turn")
+        except KintsugiError:
+            return float("-inf")
+        path = np.vstack([q, *move.waypoints])
+        if np.degrees(np.abs(np.diff(path, axis=0))).max() > BRANCH_JUMP_DEG:
+            return float("-inf")
+        end = path[-1]
+        return float(np.degrees(np.minimum(end - ik.lower, ik.upper - end)).min())
+
+    def _stand_grasp_call(self, edge: Edge, call: dict) -> dict | None:
+        """Edge synthesis (Eq. 10) of the top-down grasp that begins standing a lying object up (the edge goes
+        on to turn the hand toward an upright sub-goal): of the two hand yaws that close across it (a parallel
+        gripper is the same either way round), the one from which the whole stand-up is best followed: grasp,
+        lift, then the turn that brings the object's known top up (`_upright_call`), with the most room left at
+        the joints. The two end a half turn apart about the approach axis: one left the wrist's last roll at its
+        limit. None (the default grasp) when the edge stands nothing up, the top is unknown, or after a miss."""
+        from kintsugi.methods.agentchord.domain import UPEND_LIFT_M
+        from kintsugi.methods.agentchord.tops import upright_hand
+        from kintsugi.taskgraph.constraints import wrap_deg
+
+        arm, obj = call["arm"], call["obj"]
+        turns_up = any(a.name == "rotate_eef" and a.args.get("axis") == "closing" for a in edge.actions)
+        if not turns_up or not self._wants_upright(edge) or self.missed.get((arm, obj), 0) % 2 == 1:
+            return None
+        top = self.tops.world.get(obj)
+        seen = self.robot.features({obj})[obj]
+        if top is None or not seen.visible or seen.centroid is None or seen.axis is None:
+            return None
+        if seen.tilt_deg is None or seen.tilt_deg < 45.0:
+            return None
+        ik, shoulder = self.keyframes.iks[arm], self.keyframes.shoulders[arm]
+        state = self.robot.arm_state(arm)
+        q0 = np.radians(state.joints_deg)
+        c = np.array(seen.centroid, dtype=float)
+        c[2] = max(c[2], GRASP_Z_MIN_M)
+        base = np.asarray(self.robot.bases[arm], dtype=float) if hasattr(self.robot, "bases") else shoulder
+        radial = np.degrees(np.arctan2(c[1] - base[1], c[0] - base[0]))
+        along = np.degrees(np.arctan2(seen.axis[1], seen.axis[0]))
+        yaw0 = radial + ((along - radial + 90.0) % 180.0 - 90.0)
+        lifted = c + np.array([0.0, 0.0, UPEND_LIFT_M])
+        best: tuple[tuple[int, float], float] | None = None
+        for yaw in (yaw0, yaw0 + 180.0):
+            rot = _down(np.radians(yaw))
+            above = ik.solve(c + np.array([0.0, 0.0, 0.1]), rot, q0)
+            grasp = ik.solve(c, rot, above.q) if above.ok else above
+            lift = ik.solve(lifted, rot, grasp.q) if grasp.ok else grasp
+            if not lift.ok:
+                continue
+            score = None
+            for i, swing in enumerate(UPRIGHT_SWINGS_DEG):
+                goal = upright_hand(rot.T @ np.asarray(top, dtype=float), lifted, shoulder, swing)
+                if goal is None:
+                    return None
+                m = self._turn_margin(arm, lift.q, lifted, rot, goal)
+                if m >= JOINT_MARGIN_DEG:
+                    score = (-i, m)
+                    break
+            if score is not None and (best is None or score > best[0]):
+                best = (score, yaw)
+        if best is None:
+            return None
+        return {**call, "yaw_deg": round(float(wrap_deg(best[1])), 3)}
 
     def _heading_call(self, edge: Edge, call: dict) -> dict:
         """Edge synthesis (Eq. 10) of a turn toward a `heading` sub-goal: the absolute turn about the vertical

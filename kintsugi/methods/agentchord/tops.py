@@ -72,17 +72,26 @@ class Tops:
         tops = [t for (a, o), t in self.in_hand.items() if a == arm and o in held]
         if not tops:
             return None
-        approach = np.array([0.0, 0.0, 1.0])
-        top = tops[0] - float(tops[0] @ approach) * approach
-        if np.linalg.norm(top) < 1e-6:
-            return None
-        top /= np.linalg.norm(top)
-        out = np.asarray(arm_state.tcp_pos, dtype=float)[:2] - np.asarray(shoulder, dtype=float)[:2]
-        yaw = np.arctan2(out[1], out[0]) + np.radians(swing_deg)
-        out = np.array([np.cos(yaw), np.sin(yaw), 0.0])
-        world = np.column_stack([UP, out, np.cross(UP, out)])
-        hand = np.column_stack([top, approach, np.cross(top, approach)])
-        return world @ hand.T @ rot.T
+        hand = upright_hand(tops[0], arm_state.tcp_pos, shoulder, swing_deg)
+        return None if hand is None else hand @ rot.T
+
+
+def upright_hand(top_in_hand: Any, tcp_pos: Any, shoulder: Any, swing_deg: float = 0.0) -> np.ndarray | None:
+    """The hand orientation (world frame) that holds an object with this top (in the hand's frame) top up, the
+    hand level and facing away from the shoulder, swung `swing_deg` about the vertical; None when the top lies
+    along the approach axis (no turn about a horizontal axis stands it up)."""
+    approach = np.array([0.0, 0.0, 1.0])
+    top = np.asarray(top_in_hand, dtype=float)
+    top = top - float(top @ approach) * approach
+    if np.linalg.norm(top) < 1e-6:
+        return None
+    top /= np.linalg.norm(top)
+    out = np.asarray(tcp_pos, dtype=float)[:2] - np.asarray(shoulder, dtype=float)[:2]
+    yaw = np.arctan2(out[1], out[0]) + np.radians(swing_deg)
+    out = np.array([np.cos(yaw), np.sin(yaw), 0.0])
+    world = np.column_stack([UP, out, np.cross(UP, out)])
+    hand = np.column_stack([top, approach, np.cross(top, approach)])
+    return world @ hand.T
 
 
 class Heads(Tops):
