@@ -107,10 +107,23 @@ def test_malformed_operators_are_named(bad: dict, message: str) -> None:
         ground(domain, [], ["a"])
 
 
-def test_a_search_over_budget_gives_up_with_a_clear_error() -> None:
+def test_operators_that_cannot_matter_are_not_searched() -> None:
+    """A goal no operator can help with fails at once as never achievable, not after the whole budget."""
     domain = Domain(predicates=[PredicateSpec(name=f"b{i}", params=[]) for i in range(12)] +
                     [PredicateSpec(name="never", params=[])],
                     operators=[OperatorSpec(name=f"set{i}", params={}, add=[f"b{i}()"], actions=[{"name": "w"}],
                                             cost=1) for i in range(12)])
+    with pytest.raises(PlanningError, match="never achievable: never"):
+        plan(frozenset(), parse_literals(["never()"], domain), ground(domain, [], []), max_expansions=100)
+
+
+def test_a_search_over_budget_gives_up_with_a_clear_error() -> None:
+    domain = Domain(predicates=[PredicateSpec(name=f"b{i}", params=[]) for i in range(12)] +
+                    [PredicateSpec(name="never", params=[])],
+                    operators=[OperatorSpec(name=f"set{i}", params={}, add=[f"b{i}()"], actions=[{"name": "w"}],
+                                            cost=1) for i in range(12)] +
+                              [OperatorSpec(name="finish", params={}, pre=[f"b{i}()" for i in range(12)],
+                                            add=["never()"], actions=[{"name": "w"}], cost=1)])
+    # Every set-op is relevant (finish needs them all): uniform-cost search walks the 4,096 subsets.
     with pytest.raises(PlanningError, match="no plan within 100 expanded states"):
         plan(frozenset(), parse_literals(["never()"], domain), ground(domain, [], []), max_expansions=100)
