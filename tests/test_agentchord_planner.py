@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from kintsugi.reasoning.symbolic import PlanningError, ground, parse_literals, plan, satisfies
+from kintsugi.reasoning.symbolic import PlanningError, ground, parse_literals, plan, plan_each, satisfies
 from kintsugi.reasoning.taskgraph_types import Domain, OperatorSpec, PredicateSpec
 
 PREDS = ["p", "q", "r", "s"]
@@ -127,3 +127,19 @@ def test_a_search_over_budget_gives_up_with_a_clear_error() -> None:
     # Every set-op is relevant (finish needs them all): uniform-cost search walks the 4,096 subsets.
     with pytest.raises(PlanningError, match="no plan within 100 expanded states"):
         plan(frozenset(), parse_literals(["never()"], domain), ground(domain, [], []), max_expansions=100)
+
+
+@settings(max_examples=100)
+@given(domain=domains(), initial=states,
+       goals=st.lists(st.lists(st.sampled_from(ATOMS), min_size=1, max_size=3), min_size=1, max_size=4))
+def test_one_search_for_many_goals_gives_each_goal_its_own_plan(domain, initial, goals) -> None:
+    parsed = [parse_literals([f"{p}({o})" for p, o in g], domain) for g in goals]
+    ops = ground(domain, [], OBJS)
+    for goal, steps in zip(parsed, plan_each(initial, parsed, ops)):
+        try:
+            alone = plan(initial, goal, ops)
+        except PlanningError:
+            assert steps is None
+            continue
+        assert steps is not None
+        assert sum(op.cost for op in steps) == pytest.approx(sum(op.cost for op in alone))

@@ -16,7 +16,7 @@ from typing import Any, Callable
 
 from kintsugi.reasoning.composer import arms_named, instructed_ops, node_constraints, place_table
 from kintsugi.reasoning.jsontext import BadReply
-from kintsugi.reasoning.symbolic import PlanningError, State, ground, parse_literals, plan
+from kintsugi.reasoning.symbolic import PlanningError, State, ground, parse_literals, plan_each
 from kintsugi.reasoning.taskgraph_types import ArrangerReply, ArrangerRequest, SeenObject
 from kintsugi.taskgraph.augment import augment, parse_proposals
 from kintsugi.taskgraph.base import GraphError
@@ -186,10 +186,9 @@ def _merge(start: State, edge: Any, graph: TaskGraph, facts: dict[str, State], o
 
     nominal = nx.DiGraph((e.source, e.target) for e in graph.edges if e.kind == "nominal")
     best = None
-    for w in [edge.target, *nx.descendants(nominal, edge.target)]:
-        try:
-            steps = plan(start, (facts[w], frozenset()), ops)
-        except PlanningError:
+    later = [edge.target, *nx.descendants(nominal, edge.target)]
+    for w, steps in zip(later, plan_each(start, [(facts[w], frozenset()) for w in later], ops)):
+        if steps is None:
             continue
         key = (sum(op.cost for op in steps) + (RELEASE_COST if not steps else 0.0) + ctg[w], -ctg[w])
         if best is None or key < best[0]:

@@ -124,13 +124,39 @@ def satisfies(s: State, goal: tuple[frozenset[Atom], frozenset[Atom]]) -> bool:
     return pos <= s and not (neg & s)
 
 
-def plan(initial: State, goal: tuple[frozenset[Atom], frozenset[Atom]], ops: list[GroundOp],
-         max_expansions: int = MAX_EXPANSIONS) -> list[GroundOp]:
+Goal = tuple[frozenset[Atom], frozenset[Atom]]
+
+
+def plan(initial: State, goal: Goal, ops: list[GroundOp], max_expansions: int = MAX_EXPANSIONS) -> list[GroundOp]:
     """The cheapest operator sequence from `initial` to a state satisfying `goal` (uniform-cost search;
     ties broken by insertion order, so the answer is deterministic)."""
-    if satisfies(initial, goal):
-        return []
     ops = relevant(ops, goal)
+    (steps,), over_budget = _search(initial, [goal], ops, max_expansions)
+    if steps is not None:
+        return steps
+    if over_budget:
+        raise PlanningError(f"no plan within {max_expansions} expanded states; the domain is too loose "
+                            "or the goal unreachable")
+    missing = ", ".join(sorted(atom_text(a) for a in goal[0] - _reachable_atoms(initial, ops))) or "(a combination)"
+    raise PlanningError(f"the goal cannot be reached from the observed state with these actions; "
+                        f"never achievable: {missing}")
+
+
+def plan_each(initial: State, goals: list[Goal], ops: list[GroundOp], max_expansions: int = MAX_EXPANSIONS
+              ) -> list[list[GroundOp] | None]:
+    """The cheapest plan to each goal (None: none found within the budget), from one search instead of one
+    per goal: the arranger asks for every node after a failure at once (the same plans as `plan`, which
+    the planner tests check)."""
+    need = (frozenset().union(*(g[0] for g in goals)), frozenset().union(*(g[1] for g in goals)))
+    return _search(initial, goals, relevant(ops, need), max_expansions * max(1, len(goals)))[0]
+
+
+def _search(initial: State, goals: list[Goal], ops: list[GroundOp], max_expansions: int
+            ) -> tuple[list[list[GroundOp] | None], bool]:
+    """Uniform-cost search until every goal is met (the first state popped that meets one ends the cheapest
+    plan to it); (plans, whether the budget ran out)."""
+    found: list[list[GroundOp] | None] = [None] * len(goals)
+    waiting = list(range(len(goals)))
     counter = itertools.count()
     frontier: list[tuple[float, int, State]] = [(0.0, next(counter), initial)]
     best: dict[State, float] = {initial: 0.0}
@@ -140,16 +166,21 @@ def plan(initial: State, goal: tuple[frozenset[Atom], frozenset[Atom]], ops: lis
         cost, _, s = heapq.heappop(frontier)
         if cost > best.get(s, float("inf")):
             continue
-        if satisfies(s, goal):
+        met = [i for i in waiting if satisfies(s, goals[i])]
+        if met:
             steps: list[GroundOp] = []
-            while s in parent:
-                s, op = parent[s]
+            t = s
+            while t in parent:
+                t, op = parent[t]
                 steps.append(op)
-            return steps[::-1]
+            for i in met:
+                found[i] = steps[::-1]
+                waiting.remove(i)
+            if not waiting:
+                return found, False
         expanded += 1
         if expanded > max_expansions:
-            raise PlanningError(f"no plan within {max_expansions} expanded states; the domain is too loose "
-                                "or the goal unreachable")
+            return found, True
         for op in ops:
             if not op.applicable(s):
                 continue
@@ -159,9 +190,7 @@ def plan(initial: State, goal: tuple[frozenset[Atom], frozenset[Atom]], ops: lis
                 best[t] = c
                 parent[t] = (s, op)
                 heapq.heappush(frontier, (c, next(counter), t))
-    missing = ", ".join(sorted(atom_text(a) for a in goal[0] - _reachable_atoms(initial, ops))) or "(a combination)"
-    raise PlanningError(f"the goal cannot be reached from the observed state with these actions; "
-                        f"never achievable: {missing}")
+    return found, False
 
 
 def relevant(ops: list[GroundOp], goal: tuple[frozenset[Atom], frozenset[Atom]]) -> list[GroundOp]:
