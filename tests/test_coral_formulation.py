@@ -217,3 +217,18 @@ def test_a_place_is_done_only_with_the_box_left_on_the_disc() -> None:
     assert not bool(program.call("withdraw_up_done", env))
     descend = next(s for s in reply.stages if s.name == "descend")
     assert descend.noise_scale < 1.0 and program.has("descend_cost_seed_z")
+
+
+@pytest.mark.parametrize("body", ["return start_tcp", "return 1.0 / 0.0", "return undefined_name"])
+def test_a_broken_seed_function_is_refused_before_the_loop(body: str) -> None:
+    """`<cost>_seed_<axis>` functions are probed with the other stage functions: a vector, a division by zero or an
+    unknown name is a BadReply at formulation, not a cost error at stage entry."""
+    from kintsugi.reasoning.jsontext import BadReply
+
+    reply = compose(PUSH)
+    bad = reply.model_copy(update={"source": reply.source + f"\n\n\ndef push_cost_seed_x(start_tcp):\n    {body}\n"})
+    with pytest.raises(BadReply, match="cost code refused"):
+        check_formulation(bad, PUSH, K, T)
+    good = reply.model_copy(update={"source": reply.source + "\n\n\ndef push_cost_seed_x(start_tcp):\n"
+                                                              "    return start_tcp[0] + 0.01\n"})
+    check_formulation(good, PUSH, K, T)

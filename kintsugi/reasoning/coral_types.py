@@ -10,7 +10,7 @@ a note, rather than rejected.
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import Callable, Literal
 
 from pydantic import Field, field_validator
 
@@ -105,6 +105,16 @@ class RobotView(StrictModel):
 
 
 Grip = float | Literal["open", "closed", "free"] | str
+
+
+SEED_AXES = {"x": 0, "y": 1, "z": 2, "yaw": 3}
+"""A stage's optional `<cost>_seed_<axis>` functions of the state at stage entry give the command (TCP x, y, z in m,
+yaw in rad) its plan restarts from; the value is the actuator index."""
+
+
+def seed_functions(cost: str, defined: Callable[[str], bool]) -> dict[str, int]:
+    """The seed functions the code defines for a stage with this cost function: name -> actuator index."""
+    return {f"{cost}_seed_{a}": i for a, i in SEED_AXES.items() if defined(f"{cost}_seed_{a}")}
 
 
 class StageSpec(StrictModel):

@@ -20,7 +20,7 @@ import numpy as np
 from pydantic import ValidationError
 
 from kintsugi.errors import SandboxError
-from kintsugi.reasoning.coral_types import FormulationReply, FormulationRequest, RegionSpec, StageSpec
+from kintsugi.reasoning.coral_types import FormulationReply, FormulationRequest, RegionSpec, StageSpec, seed_functions
 from kintsugi.reasoning.jsontext import BadReply
 from kintsugi.sandbox import FUNCTIONS, CostProgram, ProbeLimits, probe
 
@@ -233,12 +233,13 @@ def compile_code(source: str, req: FormulationRequest) -> CostProgram:
 
 def probe_code(program: CostProgram, stages: list[StageSpec], req: FormulationRequest, samples: int, steps: int,
                limits: ProbeLimits = ProbeLimits()) -> None:
-    """Probe every stage function in the limited child: costs on (K, T) rollouts, done, grip and keep functions
-    on one measured state. Any failure is a BadReply quoting the sandbox's message."""
+    """Probe every stage function in the limited child: costs on (K, T) rollouts; done, grip, keep and seed
+    functions on one measured state. Any failure is a BadReply quoting the sandbox's message."""
     variables = request_variables(req)
     costs = sorted({s.cost for s in stages})
     states = sorted({s.done for s in stages} | {s.grip for s in stages if isinstance(s.grip, str) and program.has(s.grip)}
-                    | {s.keep for s in stages if s.keep})
+                    | {s.keep for s in stages if s.keep}
+                    | {name for s in stages for name in seed_functions(s.cost, program.has)})
     key = (program.source, frozenset(variables), tuple(costs), tuple(states), samples, steps, limits)
     if key not in _PROBED:
         try:

@@ -21,7 +21,7 @@ import numpy as np
 from kintsugi.control import ForceFeedbackConfig, force_feedback
 from kintsugi.errors import KintsugiError, SandboxError
 from kintsugi.methods.coral.env import entry_env, rollout_env, state_env, static_env
-from kintsugi.reasoning.coral_types import FormulationReply, StageSpec
+from kintsugi.reasoning.coral_types import FormulationReply, StageSpec, seed_functions
 from kintsugi.sandbox import CostProgram
 from kintsugi.tasks.contact.costs import Attractor, ContactRegion, View, total
 from kintsugi.tasks.contact.fsm import Stage, StageFactory
@@ -144,10 +144,6 @@ def _feedback(spec: StageSpec, cfg):  # noqa: ANN001, ANN202
     return apply
 
 
-SEED_AXES = {"x": 0, "y": 1, "z": 2, "yaw": 3}
-"""`<cost>_seed_<axis>` -> the actuator whose planned command it restarts."""
-
-
 def _seed(spec: StageSpec, program: CostProgram, obs: Observation, scene: Scene, env0: dict) -> dict[int, float]:
     """The commands a stage's plan restarts from: for each axis whose `<cost>_seed_<axis>` function the code
     defines (x, y, z of the TCP in m, yaw in rad), that function's value at stage entry.
@@ -155,10 +151,7 @@ def _seed(spec: StageSpec, program: CostProgram, obs: Observation, scene: Scene,
     A seed that fails or is not one finite number ends the attempt with a `CostCodeError`, like any function
     of the code that fails at run time."""
     out: dict[int, float] = {}
-    for axis, index in SEED_AXES.items():
-        name = f"{spec.cost}_seed_{axis}"
-        if not program.has(name):
-            continue
+    for name, index in seed_functions(spec.cost, program.has).items():
         try:
             value = np.asarray(program.call(name, state_env(obs, scene, env0, None, 0.0)), dtype=float).ravel()
         except SandboxError as exc:
