@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from kintsugi.methods.coral.env import _bounds, contact_distance, entry_env, state_env, static_env
+from kintsugi.methods.coral.env import _bounds, contact_distance, entry_env, first_env, state_env, static_env
 from kintsugi.tasks.contact.costs import Attractor, ContactRegion, norm
 from kintsugi.tasks.contact.objects import board
 from kintsugi.tasks.contact.spec import corners
@@ -45,7 +45,8 @@ def test_a_measured_state_provides_every_listed_variable() -> None:
 
     ctx, cfg, obs, req, world = coral_scene("push-force", 0)
     a = Attractor(ContactRegion(obj="box", center=(-0.03, 0, 0), normal=(-1, 0, 0), radius=0.01), 4)
-    env = state_env(obs, ctx.known, {**static_env(ctx.known, cfg), **entry_env(obs, ctx.known), "kept": 0.0}, a, 0.1)
+    env = state_env(obs, ctx.known, {**static_env(ctx.known, cfg), **entry_env(obs, ctx.known), **first_env(obs),
+                                       "kept": 0.0}, a, 0.1)
     assert request_variables(req) <= set(env)
     assert np.isclose(env["box_lo"][0], env["box_pos"][0] - env["box_half"][0], atol=0.01)  # yaw is small
     world.close()

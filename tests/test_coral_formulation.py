@@ -205,14 +205,20 @@ def test_a_pivot_that_did_not_come_to_rest_turns_further_and_is_not_a_dropped_gr
     assert reply.knobs["tip_deg"] == plan.knobs["tip_deg"]
 
 
-def test_a_place_is_done_only_with_the_box_left_on_the_disc() -> None:
+def test_a_place_is_done_only_with_the_box_left_on_the_disc_and_the_cubes_where_they_were() -> None:
     reply = compose(CLUTTER)
     checked, program, notes = check_formulation(reply, CLUTTER, K, T)
     env = sample_env(CLUTTER, ())
     env.update({"start_tcp": np.array([-0.05, 0.18, 0.06]), "tcp": np.array([-0.05, 0.18, 0.14]),
                 "touch": np.zeros(2), "box_pos": np.array([-0.05, 0.17, 0.025]), "goal_xy": np.array([-0.05, 0.18]),
                 "goal_radius": np.asarray(0.03)})
+    cubes = [o.name for o in CLUTTER.objects if o.name != "box"]
+    assert cubes
+    env.update({f"{c}_pos": env[f"first_{c}_pos"] + np.array([0.005, -0.005, 0.0]) for c in cubes})
     assert bool(program.call("withdraw_up_done", env))
+    env[f"{cubes[0]}_pos"] = env[f"first_{cubes[0]}_pos"] + np.array([0.03, 0.0, 0.0])  # a cube shoved 3 cm
+    assert not bool(program.call("withdraw_up_done", env))
+    env[f"{cubes[0]}_pos"] = env[f"first_{cubes[0]}_pos"]
     env["box_pos"] = np.array([-0.05, 0.23, 0.025])  # slid off the disc
     assert not bool(program.call("withdraw_up_done", env))
     descend = next(s for s in reply.stages if s.name == "descend")

@@ -30,7 +30,7 @@ DEFAULT_KNOBS: dict[str, float] = {
     "tip_deg": 45.0, "pivot_deg": 125.0, "reach_over_m": 0.06, "fling_m_s": 0.3, "rest_m": 0.005, "flip_deg": 75.0, "reach_tol_m": 0.012, "force_tol_n": 0.4,
     "timeout_scale": 1.0, "hold_press_s": 2.0,
     "overhang_m": 0.09, "pinch_past_edge_m": 0.035, "under_edge_z_m": -0.012, "travel_z_m": 0.07,
-    "edge_lift_z_m": 0.28, "edge_touch_n": 5.0, "still_m_s": 0.03,
+    "edge_lift_z_m": 0.28, "edge_touch_n": 5.0, "still_m_s": 0.03, "kept_m": 0.02,
 }
 """Weights (cost units per metre, newton, radian) and thresholds the skills are written with."""
 
@@ -156,7 +156,7 @@ def compose(req: FormulationRequest, knobs: dict[str, float] | None = None) -> F
         marker = next((m for m in req.markers if any(w in text for w in ("disc", "goal", "marker", "put", "place"))),
                       None)
         if marker is not None and any(w in text for w in (" put ", " place", " on ", "down")):
-            _place(plan, o, marker.name, k)
+            _place(plan, o, others, marker.name, k)
         else:
             _settle(plan, "hold", 0.5, "closed", k)
     else:
@@ -345,7 +345,7 @@ def lift_done(touch, {n}_pos, start_{n}_pos):
                     f"close until both pads press {k['touch_n']:g} N, lift {k['lift_m'] * 100:g} cm.")
 
 
-def _place(plan: Plan, o: ObjectState, marker: str, k: dict[str, float]) -> None:
+def _place(plan: Plan, o: ObjectState, others: list[ObjectState], marker: str, k: dict[str, float]) -> None:
     n = o.name
     plan.code.append(_sub(f'''def carry_cost(tcp, yaw, step_change, start_tcp, start_yaw, {n}_pos, start_{n}_pos, {marker}_xy):
     """Above the goal, the object kept where it sits in the hand."""
@@ -384,12 +384,16 @@ def lower_done(tcp, start_tcp, start_{n}_pos, {n}_half, {marker}_xy):
     plan.code.append('''def release_done(opening, touch, max_opening):
     return logical_and(opening > 0.8 * max_opening, max(touch, axis=-1) < 0.1)''')
     plan.code.append(_sub(_hold_code("withdraw_up_cost", dz="0.08"), k))
-    plan.code.append(f'''def withdraw_up_done(tcp, touch, start_tcp, {n}_pos, {marker}_xy, {marker}_radius):
-    """Up and away, the fingers off the object, and the object left on the goal (one that slid off is not done)."""
+    kept = "".join(f", {x.name}_pos, first_{x.name}_pos" for x in others)
+    left = "".join(f"\n    on_goal = logical_and(on_goal, norm({x.name}_pos[:2] - first_{x.name}_pos[:2]) < {k['kept_m']})"
+                   for x in others)
+    plan.code.append(f'''def withdraw_up_done(tcp, touch, start_tcp, {n}_pos, {marker}_xy, {marker}_radius{kept}):
+    """Up and away, the fingers off the object, the object left on the goal (one that slid off is not done), and
+    every other object still where the attempt found it (a shoved one is not done)."""
     ex = tcp[..., 0] - start_tcp[0]
     ey = tcp[..., 1] - start_tcp[1]
     ez = tcp[..., 2] - start_tcp[2] - 0.08
-    on_goal = logical_and(norm({n}_pos[:2] - {marker}_xy) < {marker}_radius, max(touch, axis=-1) < 0.1)
+    on_goal = logical_and(norm({n}_pos[:2] - {marker}_xy) < {marker}_radius, max(touch, axis=-1) < 0.1){left}
     return logical_and(sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.015, on_goal)''')
     plan.stages += [
         StageSpec(name="carry", cost="carry_cost", done="carry_done", grip="closed", timeout_s=_t(k, 5.0)),

@@ -66,6 +66,7 @@ def variable_docs(req: FormulationRequest | None, objects: list[str], fixtures: 
         out[f"{o}_half"] = f"object {o}: (3,) half extents of its known model, m"
         for key in ("pos", "yaw", "lo", "hi"):
             out[f"start_{o}_{key}"] = f"object {o}: its {key} when the stage began (constant)"
+        out[f"first_{o}_pos"] = f"object {o}: (3,) its position when the attempt began, as in the request (constant)"
     out["start_tcp"] = "(3,) the TCP when the stage began"
     out["start_yaw"] = "the hand yaw when the stage began"
     for f in fixtures:
@@ -123,6 +124,7 @@ def sample_env(req: FormulationRequest, lead: tuple[int, ...], seed: int = 0) ->
         env[f"{o.name}_spin"] = np.abs(around(0.0, 0.3, ()))
         env[f"{o.name}_half"] = half
         env[f"start_{o.name}_pos"] = np.asarray(o.pos_m, float)
+        env[f"first_{o.name}_pos"] = np.asarray(o.pos_m, float)
         env[f"start_{o.name}_yaw"] = np.asarray(yaw)
         env[f"start_{o.name}_lo"] = np.asarray(o.pos_m, float) - half
         env[f"start_{o.name}_hi"] = np.asarray(o.pos_m, float) + half

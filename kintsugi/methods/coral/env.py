@@ -72,6 +72,12 @@ def contact_distance(attractor: Attractor, tcp: np.ndarray, pos: np.ndarray, qua
     return (np.sqrt(np.maximum(d2, 0.0) + EPS * EPS) - EPS).min(axis=-1)  # the smooth norm of Attractor.distance
 
 
+def first_env(obs: Observation) -> dict[str, np.ndarray]:
+    """The `first_*` constants of an attempt: where each object was when it began (a place's check that the
+    other objects were left where they were reads them)."""
+    return {f"first_{name}_pos": o.pos.copy() for name, o in obs.objects.items()}
+
+
 def entry_env(obs: Observation, scene: Scene) -> dict[str, np.ndarray]:
     """The `start_*` constants of a stage, from the state it began in."""
     env = {"start_tcp": obs.ee[:3].copy(), "start_yaw": np.asarray(float(obs.ee[3]))}

@@ -174,11 +174,13 @@ class Coral:
         return False
 
     def _attempt(self, robot: Any, log: TrialLog, plan: Any, program: Any, planning: Any, attempt: int):  # noqa: ANN202
+        from kintsugi.methods.coral.env import first_env
         from kintsugi.methods.coral.stages import CodeTiming, CostCodeError, build_stages
         from kintsugi.tasks.contact.execute import run_attempt
 
         timing = CodeTiming()
-        factories = build_stages(plan, program, self.ctx.known, self.ctx.cfg, self.ctx.seed + 1000 * attempt, timing)
+        factories = build_stages(plan, program, self.ctx.known, self.ctx.cfg, self.ctx.seed + 1000 * attempt, timing,
+                                 first_env(robot.observe()))
         try:
             result, trace = run_attempt(self.ctx.cfg, robot, planning, factories, log,
                                         seed=self.ctx.seed + 1000 * attempt)

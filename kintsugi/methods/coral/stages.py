@@ -59,8 +59,9 @@ def _truthy(value: np.ndarray) -> bool:
 
 
 def build_stages(reply: FormulationReply, program: CostProgram, scene: Scene, cfg, seed: int,  # noqa: ANN001
-                 timing: CodeTiming) -> list[StageFactory]:
-    fixed = static_env(scene, cfg)
+                 timing: CodeTiming, first: dict[str, np.ndarray] | None = None) -> list[StageFactory]:
+    """`first`: the `first_<object>_pos` constants, where each object was when the attempt began."""
+    fixed = {**static_env(scene, cfg), **(first or {})}
     return [_factory(s, reply, program, scene, cfg, fixed, seed + i, timing) for i, s in enumerate(reply.stages)]
 
 
