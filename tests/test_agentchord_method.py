@@ -33,12 +33,16 @@ def test_a_drop_runs_the_precompiled_forward_recovery() -> None:
     assert any(e.kind == "disturbance" for e in r.events)
     fired = [e.detail for e in r.events if e.kind == "monitor"]
     assert fired and "drop" in fired[0] and "re.e2_lift.drop.right.0" in fired[0]  # the hub: where did it land?
-    assert r.transitions == [("e2_lift", "re.e2_lift.drop.right.0")]
-    rec = [s.skill for s in r.skills if s.recovery]
-    # The hub lets the bottle come to rest and backs the emptied hand away home before the re-grasp.
-    assert rec[-3:] == ["back", "grasp", "move_by_offset"] and set(rec[:-3]) <= {"open_gripper"}
+    assert r.transitions[0] == ("e2_lift", "re.e2_lift.drop.right.0")
+    assert all(to.endswith(".drop.right.0") for _, to in r.transitions)  # every later drop lands in its hub too
+    first = next(i for i, s in enumerate(r.skills) if s.recovery)
+    last = next(i for i in range(first, len(r.skills)) if not r.skills[i].recovery)
+    chain = [s.skill for s in r.skills[first:last] if s.skill != "open_gripper"]
+    # The hub lets the bottle come to rest and raises the emptied hand home before the re-grasp.
+    assert chain == ["back", "grasp", "move_by_offset"]
     m = metrics_of(r)
-    assert m.recoveries == 1 and m.recovery_latency_steps == [0] and m.runtime_reasoning_calls == 0
+    assert m.recoveries == len(r.transitions) and set(m.recovery_latency_steps) == {0}
+    assert m.runtime_reasoning_calls == 0
     assert r.success and r.framework_success
     again = _trial("drop", 3, **{"disturbance.drop_p": 0.1})
     assert again.without_timings() == r.without_timings()

@@ -36,10 +36,12 @@ RELEASE_COST = 10.0
 """Control steps of a recovery that only opens the hand (the failure already reached the merge node)."""
 CLEAR_M = 0.08
 CLEAR_COST = 200.0
-"""After a fall, the emptied hand backs this far out along its approach axis and goes home (about this many
-control steps) before anything reaches for the fallen object: it was dropped mid-carry, often right beside
-what the other hand holds up, and the joint-space move to a re-grasp pose from there swept the open fingers
-through that object (pour-dual: the held cup knocked out of the left hand) or through the fallen one."""
+"""After a fall, the emptied hand rises this far straight up and goes home (about this many control steps)
+before anything reaches for the fallen object: it was dropped mid-carry, often right beside what the other
+hand holds up, and the joint-space move to a re-grasp pose from there swept the open fingers through that
+object (pour-dual: the held cup knocked out of the left hand) or through the fallen one. Up, not back along
+the approach: what fell lies below the hand, or leans on what the other hand holds (backing away dragged a
+bottle resting on the held cup off it)."""
 
 
 @dataclass(frozen=True)
@@ -217,8 +219,8 @@ def _branch(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: Failure
         nodes = [{"id": hub, "description": f"after {mode.name}: {obj} at rest, released"}]
         edges = [{"id": f"re.{tag}.0", "source": edge.source, "target": hub, "cost": RELEASE_COST + CLEAR_COST,
                   "actions": [{"name": "open_gripper", "args": {"arm": arm}},
-                              {"name": "back", "args": {"arm": arm, "retreat_m": CLEAR_M}}],
-                  "description": f"recovery for {mode.name}: let {obj} come to rest, back the empty hand away, "
+                              {"name": "back", "args": {"arm": arm, "rise_m": CLEAR_M}}],
+                  "description": f"recovery for {mode.name}: let {obj} come to rest, raise the empty hand home, "
                                  "then see how it lies"}]
         misses = []
         for label, state, guard in outs:

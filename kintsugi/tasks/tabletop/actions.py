@@ -114,9 +114,9 @@ class Back(_Action):
     """Return the arm to its home configuration."""
 
     action: Literal["back"] = "back"
-    retreat_m: float = Field(0.0, ge=0.0, le=0.3)
-    """First back the gripper this far straight out along its approach axis (its fingers leave whatever they
-    are beside before the joint-space move home sweeps them), as far as the arm follows that line."""
+    rise_m: float = Field(0.0, ge=0.0, le=0.3)
+    """First raise the gripper this far straight up (its fingers leave whatever they are beside or above before
+    the joint-space move home sweeps them), as far as the arm follows that line."""
 
 
 ArmAction = Annotated[

@@ -183,9 +183,9 @@ class Planner:
     def _back(self, a: A.Back, arm: ArmView, feats: dict) -> list[Step]:
         home = self.iks[a.arm].home
         steps: list[Step] = []
-        if a.retreat_m > 0.0:
-            out = self._linear_prefix(a.arm, (arm.pos, arm.rot), (arm.pos - a.retreat_m * arm.rot[:, 2], arm.rot),
-                                      arm.q, "back away")
+        if a.rise_m > 0.0:
+            out = self._linear_prefix(a.arm, (arm.pos, arm.rot), (arm.pos + np.array([0.0, 0.0, a.rise_m]), arm.rot),
+                                      arm.q, "rise")
             if out is not None:
                 steps.append(out)
         return steps + [Move([home.copy()], tcp=self.iks[a.arm].fk(home), label="home")]
