@@ -46,12 +46,11 @@ def test_the_full_retreat_line_would_flip_the_wrist(planner: Planner) -> None:
     assert _largest_step_deg(view.q, [move]) > 90.0
 
 
-def test_backing_away_stops_where_the_wrist_would_flip(planner: Planner) -> None:
+def test_a_retreat_stops_where_the_wrist_would_flip(planner: Planner) -> None:
     view = _view(planner, AT_LIMIT_DEG)
-    steps = planner._back(A.Back(arm="right", retreat_m=0.08), view, {})
-    away, home = steps
-    assert away.label == "back away" and home.label == "home"
-    assert _largest_step_deg(view.q, [away]) <= BRANCH_JUMP_DEG
+    goal = view.pos - 0.08 * view.rot[:, 2]
+    away = planner._linear_prefix("right", (view.pos, view.rot), (goal, view.rot), view.q, "retreat")
+    assert away is not None and _largest_step_deg(view.q, [away]) <= BRANCH_JUMP_DEG
     # It still backed out some of the way, straight along the approach axis, orientation kept.
     moved = away.tcp[0] - view.pos
     assert 0.01 < float(np.linalg.norm(moved)) < 0.08
@@ -59,18 +58,26 @@ def test_backing_away_stops_where_the_wrist_would_flip(planner: Planner) -> None
     assert np.allclose(away.tcp[1], view.rot)
 
 
-def test_back_without_a_retreat_goes_straight_home(planner: Planner) -> None:
+def test_back_can_first_raise_the_hand_straight_up(planner: Planner) -> None:
+    view = _view(planner, AT_LIMIT_DEG)
+    rise, home = planner._back(A.Back(arm="right", rise_m=0.08), view, {})
+    assert rise.label == "rise" and home.label == "home"
+    assert _largest_step_deg(view.q, [rise]) <= BRANCH_JUMP_DEG
+    assert np.allclose(rise.tcp[0], view.pos + [0.0, 0.0, 0.08], atol=1e-9) and np.allclose(rise.tcp[1], view.rot)
+
+
+def test_back_without_a_rise_goes_straight_home(planner: Planner) -> None:
     view = _view(planner, AT_LIMIT_DEG)
     steps = planner._back(A.Back(arm="right"), view, {})
     assert [s.label for s in steps] == ["home"]
 
 
-def test_a_retreat_the_arm_follows_is_the_whole_line(planner: Planner) -> None:
+def test_a_line_the_arm_follows_is_kept_whole(planner: Planner) -> None:
     home = planner.iks["right"].home
     pos, rot = planner.iks["right"].fk(home)
-    view = ArmView(q=home, pos=pos, rot=rot, base=np.array([-0.05, -0.3, 0.0]), touching={})
-    away = planner._back(A.Back(arm="right", retreat_m=0.05), view, {})[0]
-    assert np.allclose(away.tcp[0], pos - 0.05 * rot[:, 2], atol=1e-9)
+    goal = pos - 0.05 * rot[:, 2]
+    away = planner._linear_prefix("right", (pos, rot), (goal, rot), home, "retreat")
+    assert np.allclose(away.tcp[0], goal, atol=1e-9)
 
 
 def test_upright_hand_puts_the_top_up_and_faces_away_from_the_shoulder() -> None:
@@ -84,3 +91,48 @@ def test_upright_hand_puts_the_top_up_and_faces_away_from_the_shoulder() -> None
     a, b = upright_hand([1.0, 0.0, 0.0], tcp, shoulder), upright_hand([-1.0, 0.0, 0.0], tcp, shoulder)
     assert np.allclose(a[:, 0], -b[:, 0], atol=1e-9) and np.allclose(a[:, 2], b[:, 2], atol=1e-9)
     assert upright_hand([0.0, 0.0, 1.0], tcp, shoulder) is None  # a top along the approach: no such turn
+
+
+def test_a_side_grasp_beside_a_held_cup_is_taken_from_the_facing_that_clears_it() -> None:
+    """pour-dual seed 1: the bottle fell upright against the cup the left hand holds up. Taken the default way
+    (facing away from the arm's base), one open finger passes inside the cup's footprint, just under its
+    bottom, and the lift carries the cup up; the synthesised grasp comes in from the other side."""
+    from types import SimpleNamespace
+
+    from kintsugi.methods.agentchord.keyframes import TabletopKeyframes
+    from kintsugi.methods.agentchord.synthesis import FINGER_CLEAR_M, EdgeSynthesis, _gap
+    from kintsugi.methods.agentchord.tops import Heads, Tops
+    from kintsugi.tasks.tabletop.planning import side_rotation
+
+    def upright(name, x, y, r, z0, z1):  # noqa: ANN001, ANN202
+        return SimpleNamespace(name=name, visible=True, centroid=(x, y, (z0 + z1) / 2), axis=(0.0, 0.0, 1.0),
+                               upright=True, tilt_deg=0.0, extent=(z1 - z0, 2 * r, 2 * r),
+                               extremes={"top": (x, y, z1), "bottom": (x, y, z0), "axis_pos": (x, y, z1),
+                                         "axis_neg": (x, y, z0)})
+
+    seen = {"bottle": upright("bottle", 0.513, -0.111, 0.03, 0.0, 0.2),
+            "cup": upright("cup", 0.506, -0.035, 0.045, 0.118, 0.208)}
+    cfg = TabletopConfig()
+    kf = TabletopKeyframes(cfg)
+    home = np.degrees(kf.iks["right"].home)
+
+    class Robot:
+        bases = {"right": np.array([-0.05, -0.3, 0.0]), "left": np.array([-0.05, 0.3, 0.0])}
+
+        def features(self, names=None):  # noqa: ANN001, ANN202
+            return {k: v for k, v in seen.items() if names is None or k in names}
+
+        def arm_state(self, arm):  # noqa: ANN001, ANN202
+            return SimpleNamespace(joints_deg=tuple(home))
+
+    syn = EdgeSynthesis(None, Robot(), kf, Tops(), Heads())  # type: ignore[arg-type]
+    call = {"action": "grasp", "arm": "right", "obj": "bottle", "pre_grasp_offset": 0.08}
+    out = syn._clear_grasp_call(dict(call))
+    assert out.get("yaw_deg") is not None
+    c = np.array(seen["bottle"].centroid)
+    closing = side_rotation(np.radians(out["yaw_deg"]))[:, 1]
+    fingers = [c + w * closing for w in (-0.05, 0.05)]
+    assert min(_gap(p, 0.085, 0.235, seen["cup"]) for p in fingers) >= FINGER_CLEAR_M
+    # With the cup moved away, the grasp is left as the composer gave it.
+    seen["cup"] = upright("cup", 0.506, 0.2, 0.045, 0.118, 0.208)
+    assert syn._clear_grasp_call(dict(call)) == call

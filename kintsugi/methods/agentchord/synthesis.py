@@ -17,6 +17,15 @@ GRASP_Z_MIN_M = 0.029
 """A top-down grasp point is no lower than this (the pads' half length plus the table clearance)."""
 UPRIGHT_SWINGS_DEG = (0.0, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0)
 """Standing a held object up: the hand faces away from the shoulder, or swung this far about the vertical."""
+FINGER_CLEAR_M = 0.01
+"""A side grasp whose open fingers (on the way in, closed, and lifted as far as a lift goes) pass this close to
+another perceived object is taken from another facing, the one that clears the neighbours most (pour-dual
+seed 1: a bottle fallen upright against the held-up cup; one finger closed just under the cup and the lift
+carried the cup up out of the other hand)."""
+SIDE_SWINGS_DEG = (30.0, -30.0, 60.0, -60.0, 90.0, -90.0)
+FINGER_HALF_OPEN_M = 0.05
+FINGER_REACH_M = 0.025
+"""The open fingers are this far either side of the grasp point, and reach this far past it along the approach."""
 JOINT_MARGIN_DEG = 30.0
 """A turn that stands a held object up should leave every joint this far inside its limits: the place that
 follows moves the base and turns the wrist's last roll with it (a roll left at its limit made the place's
@@ -29,6 +38,28 @@ def _down(yaw: float) -> np.ndarray:
     from kintsugi.tasks.tabletop.planning import down_rotation
 
     return down_rotation(yaw)
+
+
+def _across(f: Any) -> float:
+    """Half the perceived object's width across its axis."""
+    if f.extent is None:
+        return 0.03
+    return float(max(f.extent[1], f.extent[2])) / 2.0
+
+
+def _gap(p: np.ndarray, z_lo: float, z_hi: float, o: Any) -> float:
+    """Horizontal clearance from point p (swept from z_lo to z_hi) to a perceived object, taken as a vertical
+    capsule around its axis ends' footprint with half its width as radius; +inf when their heights do not meet."""
+    top = o.extremes.get("top") if o.extremes else None
+    bottom = o.extremes.get("bottom") if o.extremes else None
+    if top is not None and bottom is not None and (z_hi < bottom[2] or z_lo > top[2]):
+        return float("inf")
+    ends = [o.extremes.get(k) for k in ("axis_pos", "axis_neg")] if o.extremes else [None, None]
+    a = np.array(ends[0] if ends[0] is not None else o.centroid, dtype=float)[:2]
+    b = np.array(ends[1] if ends[1] is not None else o.centroid, dtype=float)[:2]
+    d = b - a
+    t = 0.0 if float(d @ d) < 1e-12 else float(np.clip((p[:2] - a) @ d / (d @ d), 0.0, 1.0))
+    return float(np.linalg.norm(p[:2] - (a + t * d))) - _across(o)
 
 
 def region_centre(c: Any) -> tuple[float, float]:
@@ -58,6 +89,8 @@ class EdgeSynthesis:
         if name == "grasp" and call.get("yaw_deg") is None and call.get("grasp_offset") is None:
             stand = self._stand_grasp_call(edge, call)
             call = stand if stand is not None else self._grasp_call(call)
+            if call.get("yaw_deg") is None:
+                call = self._clear_grasp_call(call)
         return call
 
     def _wants_upright(self, edge: Edge) -> bool:
@@ -210,6 +243,56 @@ class EdgeSynthesis:
         if not self.keyframes.iks[arm].solve(c, rot, np.radians(state.joints_deg)).ok:
             return call
         return {**call, "yaw_deg": round(float(yaw), 3)}
+
+    def _clear_grasp_call(self, call: dict) -> dict:
+        """Edge synthesis (Eq. 10) of a side grasp on an upright object: as given when its fingers clear every other
+        perceived object by FINGER_CLEAR_M, else the facing (swung about the vertical from the default, which
+        faces away from the arm's base) whose fingers clear them most, among those the arm reaches (IK of the
+        pre-grasp and grasp poses, checked before moving). Only perceived geometry is read."""
+        from kintsugi.methods.agentchord.domain import LIFT_M, UPEND_LIFT_M
+        from kintsugi.tasks.tabletop.planning import side_rotation
+
+        arm, obj = call["arm"], call["obj"]
+        if self.missed.get((arm, obj), 0) % 2 == 1:
+            return call
+        seen = self.robot.features()
+        f = seen.get(obj)
+        if f is None or not f.visible or f.centroid is None or not f.upright or f.axis is None:
+            return call
+        others = [o for k, o in seen.items() if k != obj and o.visible and o.centroid is not None]
+        if not others:
+            return call
+        c = np.array(f.centroid, dtype=float)
+        radius = _across(f)
+        base = np.asarray(self.robot.bases[arm], dtype=float)
+        radial = float(np.arctan2(c[1] - base[1], c[0] - base[0]))
+        pre = float(call.get("pre_grasp_offset", 0.08))
+        rise = max(LIFT_M, UPEND_LIFT_M)
+
+        def clearance(yaw: float) -> float:
+            rot = side_rotation(yaw)
+            approach, closing = rot[:, 2], rot[:, 1]
+            pts = [c + s * approach + w * closing for s in np.linspace(-pre, FINGER_REACH_M, 6)
+                   for w in (-FINGER_HALF_OPEN_M, FINGER_HALF_OPEN_M)]
+            pts += [c + s * approach + w * closing for s in (0.0, FINGER_REACH_M) for w in (-radius, radius)]
+            return min(_gap(p, c[2] - 0.015, c[2] + 0.015 + rise, o) for p in pts for o in others)
+
+        if clearance(radial) >= FINGER_CLEAR_M:
+            return call
+        ik, q = self.keyframes.iks[arm], np.radians(self.robot.arm_state(arm).joints_deg)
+        best, best_yaw = clearance(radial), None
+        for swing in SIDE_SWINGS_DEG:
+            yaw = radial + np.radians(swing)
+            gap = clearance(yaw)
+            if gap <= best + 1e-3:
+                continue
+            rot = side_rotation(yaw)
+            first = ik.solve(c - pre * rot[:, 2], rot, q)
+            if first.ok and ik.solve(c, rot, first.q).ok:
+                best, best_yaw = gap, yaw
+        if best_yaw is None:
+            return call
+        return {**call, "yaw_deg": round(float(np.degrees(best_yaw) + 180.0) % 360.0 - 180.0, 3)}
 
     def grasp_outcome(self, call: dict) -> None:
         """Count grasps that closed on nothing in a row: the next one is tried the other way (chosen yaw <->
