@@ -1,5 +1,5 @@
 """Trajectory export: a one-trial agentchord campaign with a drop (pour-single, seed 3 drops the bottle at the
-end of the lift and the pre-compiled branch re-grasps), re-run and written as robomimic HDF5 and LeRobot v2.1;
+end of the lift and the pre-compiled branch re-grasps; later drops may follow, as the actions' draws fall), re-run and written as robomimic HDF5 and LeRobot v2.1;
 files read back. A record the re-run does not reproduce is refused; bad filters and rates are one-line errors."""
 
 from __future__ import annotations
@@ -79,10 +79,11 @@ def test_hdf5_holds_observations_actions_and_both_segments(campaign: Path, hdf5_
         edges = [vocab["edge"][i] for i in demo["labels/edge"][:]]
         actions = [vocab["action"][i] for i in demo["labels/action"][:]]
         assert recovery.any() and (~recovery).any()
-        assert all(e.startswith("re.e2_lift.drop") for e, r in zip(edges, recovery) if r)
+        assert all(e.startswith("re.") for e, r in zip(edges, recovery) if r)
         assert not any(e.startswith("re.") for e, r in zip(edges, recovery) if not r)
-        first, last = np.flatnonzero(recovery)[[0, -1]]
-        assert recovery[first:last + 1].all(), "one drop, one contiguous recovery segment"
+        first = int(np.flatnonzero(recovery)[0])
+        last = first + int(np.argmin(recovery[first:])) - 1  # the end of the first recovery segment
+        assert all(e.startswith("re.e2_lift.drop") for e in edges[first:last + 1]), "the lift's drop, recovered"
         assert edges[first - 1] == "e2_lift" and edges[last + 1] == "e3_carry_over"
         assert actions[first] == "open_gripper" and act[first, 13] == 0.0  # the branch lets go first
         assert "grasp" in actions[first:last + 1]  # ... then re-grasps the dropped bottle
@@ -121,8 +122,9 @@ def test_lerobot_layout_reads_back_and_agrees_with_hdf5(campaign: Path, hdf5_exp
     rec = np.array(table["segment.recovery"])
     assert rec.any() and (~rec).any()
     names = json.loads((out / "meta/segments.json").read_text())["segment.edge_index"]
-    assert {names[i] for i, r in zip(table["segment.edge_index"], rec) if r} <= {
-        n for n in names if n.startswith("re.e2_lift.drop")}
+    recovered = {names[i] for i, r in zip(table["segment.edge_index"], rec) if r}
+    assert recovered <= {n for n in names if n.startswith("re.")}
+    assert any(n.startswith("re.e2_lift.drop") for n in recovered)
     stats = json.loads((out / "meta/episodes_stats.jsonl").read_text())["stats"]
     assert stats["action"]["count"] == [t] and len(stats["observation.images.top"]["mean"]) == 3
 
