@@ -259,6 +259,8 @@ class EdgeSynthesis:
         f = seen.get(obj)
         if f is None or not f.visible or f.centroid is None or not f.upright or f.axis is None:
             return call
+        if not hasattr(self.robot, "bases"):
+            return call
         others = [o for k, o in seen.items() if k != obj and o.visible and o.centroid is not None]
         if not others:
             return call
