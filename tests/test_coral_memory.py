@@ -65,3 +65,16 @@ def test_stored_code_is_untrusted(tmp_path) -> None:  # noqa: ANN001
     recalled, _, beliefs = first._recall(first._memory(), req, req.priors, 16, 5, log, 0.0)
     assert recalled is None and beliefs == req.priors
     assert any("unusable" in e.detail and "refused" in e.detail for e in log.events)
+
+
+def test_the_prior_stress_scales_what_the_model_answered_and_says_so() -> None:
+    from kintsugi.methods.coral.method import stressed
+    from kintsugi.tasks.contact.config import CoralSection
+
+    priors = {"box": ObjectPrior(mass_kg=0.1, friction=0.4)}
+    assert stressed(priors, CoralSection()) == (priors, None)
+    scaled, note = stressed(priors, CoralSection(prior_mass_scale=8.0, prior_friction_scale=1.8))
+    assert scaled["box"].mass_kg == pytest.approx(0.8) and scaled["box"].friction == pytest.approx(0.72)
+    assert "x8" in note and "x1.8" in note
+    with pytest.raises(ValueError):
+        CoralSection(prior_mass_scale=0.0)

@@ -123,7 +123,9 @@ class Coral:
         views = object_views(ctx.known)
         # No camera image: the contact robot has no image API yet, so the roles get labels, sizes and poses only.
         priors, notes = ask_priors(reasoner, PriorsRequest(task=ctx.task_text, objects=views))
-        beliefs = dict(priors.objects)
+        beliefs, stress = stressed(dict(priors.objects), cfg.coral)
+        if stress:
+            log.event(obs.t, "priors", stress)
         self.info["priors"] = {k: v.model_dump() for k, v in beliefs.items()}
         if notes:
             log.event(obs.t, "priors", "; ".join(notes))
@@ -328,6 +330,16 @@ class Coral:
 
     def summary(self) -> dict[str, Any]:
         return {**self.info, "attempts": self.attempts}
+
+
+def stressed(beliefs: dict[str, Any], coral: Any) -> tuple[dict[str, Any], str | None]:
+    """The priors as `coral.prior_mass_scale` / `prior_friction_scale` distort them (a stress test of the outer
+    loop: a model that misjudged the material), and the event line saying so; unchanged at scale 1."""
+    m, f = coral.prior_mass_scale, coral.prior_friction_scale
+    if (m, f) == (1.0, 1.0):
+        return beliefs, None
+    return ({k: v.model_copy(update={"mass_kg": v.mass_kg * m, "friction": v.friction * f}) for k, v in beliefs.items()},
+            f"stress: the priors scaled x{m:g} in mass and x{f:g} in friction")
 
 
 def _meta(episode: Any) -> dict[str, Any]:

@@ -118,6 +118,11 @@ class CoralSection(StrictModel):
     """SQLite file of successful episodes, shared by a campaign's trials (run them with --workers 1, in order)."""
     memory_threshold: float = Field(0.6, ge=0, le=1)
     """A stored episode at least this similar replaces the formulation call."""
+    prior_mass_scale: float = Field(1.0, gt=0, le=100)
+    """Stress: the physics-priors reply's masses times this (a model that misjudges the material), before anything
+    plans with them; 1 = as the model answered."""
+    prior_friction_scale: float = Field(1.0, gt=0, le=100)
+    """Stress: the same for the friction coefficients."""
 
 
 class CameraSection(StrictModel):
