@@ -78,3 +78,15 @@ def test_the_prior_stress_scales_what_the_model_answered_and_says_so() -> None:
     assert "x8" in note and "x1.8" in note
     with pytest.raises(ValueError):
         CoralSection(prior_mass_scale=0.0)
+
+
+def test_a_recalled_mass_is_the_refinement_of_its_prior_not_another_boxs_mass(tmp_path) -> None:  # noqa: ANN001
+    """Friction is the material's and carries over; mass carries over as a correction of the episode's own prior
+    (the prior scales with the box's size), so a bigger box is not planned with a smaller one's mass."""
+    first, req1 = _coral(tmp_path, "coral", 0)
+    first.info["priors"] = {"box": {"mass_kg": 0.20, "friction": 0.5, "material": "wood"}}
+    first._remember(first._memory(), req1, {"box": ObjectPrior(mass_kg=0.30, friction=0.41)}, compose(req1))
+    second, req2 = _coral(tmp_path, "coral", 1)
+    now = {"box": ObjectPrior(mass_kg=0.40, friction=0.5)}  # this box's own prior: twice the volume
+    _, _, beliefs = second._recall(second._memory(), req2, now, 16, 5, TrialLog(), 0.0)
+    assert beliefs["box"].mass_kg == pytest.approx(0.60) and beliefs["box"].friction == pytest.approx(0.41)

@@ -287,7 +287,7 @@ class Coral:
 
     def _recall(self, memory: Any, req: Any, beliefs: dict, samples: int, steps: int, log: TrialLog, t: float
                 ) -> tuple[Any, Any, dict]:
-        from kintsugi.reasoning.coral_types import FormulationReply, ObjectPrior, ObjectView, StageSpec
+        from kintsugi.reasoning.coral_types import FormulationReply, ObjectView, StageSpec
         from kintsugi.reasoning.formulate import check_formulation
         from kintsugi.reasoning.jsontext import BadReply
 
@@ -308,8 +308,8 @@ class Coral:
         except (BadReply, ValueError) as exc:
             log.event(t, "memory", f"episode {best.id} unusable ({exc}); formulating instead"[:300])
             return None, None, beliefs
-        recalled = {**beliefs, **{k: ObjectPrior.model_validate(v.model_dump()) for k, v in best.episode.beliefs.items()
-                                  if k in beliefs}}
+        recalled = {**beliefs, **{k: _transfer(v, beliefs[k], meta.get("priors", {}).get(k))
+                                  for k, v in best.episode.beliefs.items() if k in beliefs}}
         self.info.update(plan_from=f"memory episode {best.id}", memory_beliefs=_dump(recalled))
         log.event(t, "memory", f"episode {best.id} (score {best.score:.2f}) replaces the formulation; beliefs "
                   + ", ".join(f"{k} {v.mass_kg:.3g} kg / {v.friction:.3g}" for k, v in recalled.items()))
@@ -324,7 +324,8 @@ class Coral:
         memory.add(Episode(task=self.ctx.task.name, instruction=req.task,
                            objects=[ObjectView(label=o.name, size_m=o.size_m) for o in req.objects],
                            beliefs=beliefs, cost_source=plan.source, regions=plan.regions,
-                           notes=json.dumps({"method": self.variant.name, "stages": [s.model_dump() for s in plan.stages],
+                           notes=json.dumps({"method": self.variant.name, "priors": self.info.get("priors", {}),
+                                             "stages": [s.model_dump() for s in plan.stages],
                                              "knobs": plan.knobs})))
         memory.close()
 
@@ -340,6 +341,23 @@ def stressed(beliefs: dict[str, Any], coral: Any) -> tuple[dict[str, Any], str |
         return beliefs, None
     return ({k: v.model_copy(update={"mass_kg": v.mass_kg * m, "friction": v.friction * f}) for k, v in beliefs.items()},
             f"stress: the priors scaled x{m:g} in mass and x{f:g} in friction")
+
+
+def _transfer(stored: Any, prior_now: Any, prior_then: dict | None) -> Any:
+    """A remembered belief for this trial's object. Friction is the material's and carries over as it was
+    refined; mass carries over as the refinement's correction of that episode's prior (the same material, another
+    size: the prior scales with the box's volume, a remembered absolute mass would not). An episode stored without
+    its priors gives its beliefs as they are."""
+    from kintsugi.reasoning.coral_types import ObjectPrior
+
+    out = ObjectPrior.model_validate(stored.model_dump())
+    try:
+        then = float(prior_then["mass_kg"]) if prior_then else 0.0
+    except (KeyError, TypeError, ValueError):
+        then = 0.0
+    if then > 0 and math.isfinite(then):
+        out = out.model_copy(update={"mass_kg": prior_now.mass_kg * out.mass_kg / then})
+    return out
 
 
 def _meta(episode: Any) -> dict[str, Any]:
