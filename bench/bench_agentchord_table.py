@@ -69,16 +69,34 @@ def run_suites(argv: list[str]) -> list[str]:
     return outs
 
 
+def paired(rs: list, reference: list) -> str:
+    """Mean steps and execution time over the seeds that both this method and the reference solved: the like-for-like
+    cost, which a mean over all trials hides when one method finishes (at length) trials the other fails early."""
+    ok = {r.seed: metrics_of(r) for r in reference if r.success and metrics_of(r) is not None}
+    pairs = [(metrics_of(r), ok[r.seed]) for r in rs if r.success and r.seed in ok and metrics_of(r) is not None]
+    if not pairs or rs[0].method == "agentchord":
+        return "-"
+    return (f"{mean(a.episode_steps for a, _ in pairs):.0f} vs {mean(b.episode_steps for _, b in pairs):.0f} / "
+            f"{mean(a.execution_time_s for a, _ in pairs):.1f} vs {mean(b.execution_time_s for _, b in pairs):.1f} "
+            f"({len(pairs)})")
+
+
 def main() -> None:
     outs = run_suites(sys.argv[2:]) if sys.argv[1:2] == ["--run"] else sys.argv[1:]
+    reference = defaultdict(list)  # agentchord's trials per (task, condition, p), from any of the campaigns given
+    for out in outs:
+        for r in iter_records(out):
+            if r.method == "agentchord":
+                reference[(r.task, r.condition, r.params.get("drop_p"))].append(r)
     for out in outs:
         groups = defaultdict(list)
         for r in iter_records(out):
             groups[(r.condition, r.params.get("drop_p"), r.method)].append(r)
         print(f"## {out}")
         print("| condition | p | method | n | success % [95% CI] | steps | sim s | exec s | modelled s | runtime calls "
-              "| recoveries | latency steps | detect delay steps (mean, n) | errors |")
-        print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+              "| recoveries | latency steps | detect delay steps (mean, n) | errors | steps / exec s where it and "
+              "agentchord both succeed: it vs agentchord (n) |")
+        print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
         for (cond, p, method), rs in sorted(groups.items(), key=lambda kv: (str(kv[0][0]), str(kv[0][1]), kv[0][2])):
             ms = [metrics_of(r) for r in rs]
             have = [m for m in ms if m is not None]
@@ -92,7 +110,7 @@ def main() -> None:
                   f"{mean(m.modelled_execution_time_s for m in have) if have else float('nan'):.1f} | "
                   f"{mean(m.runtime_reasoning_calls for m in have) if have else float('nan'):.1f} | "
                   f"{sum(m.recoveries for m in have)} | {max(lat) if lat else '-'} | {delay} | "
-                  f"{sum(1 for r in rs if r.error)} |")
+                  f"{sum(1 for r in rs if r.error)} | {paired(rs, reference[(rs[0].task, cond, p)])} |")
 
 
 if __name__ == "__main__":
