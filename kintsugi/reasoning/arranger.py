@@ -178,12 +178,31 @@ def _placed_by(edge: Any, arm: str) -> bool:
     return any(a.name == "place" and a.args.get("arm") == arm for a in edge.actions)
 
 
+_MERGES: dict[tuple, tuple[str, list] | str] = {}
+"""`_merge`'s answers within one `embedded_arrange` call (cleared at its start): a drop and a slip on the same
+edge leave the same state, so half the searches were repeats."""
+
+
 def _merge(start: State, edge: Any, graph: TaskGraph, facts: dict[str, State], ops: list,
            ctg: dict[str, float]) -> tuple[str, list]:
     """The merge node and the plan to it: of the failed edge's target and every node after it, the one whose
     facts the planner reaches for the least cost plus its own cost-to-go (the earliest on a tie, so a branch
     never duplicates the nominal graph). A plan of no steps (the failure already left that node's facts
     true, e.g. an object dropped upright where it was to be placed) merges by releasing the hand."""
+    key = (id(graph), id(ops), start, edge.target)
+    if key not in _MERGES:
+        try:
+            _MERGES[key] = _search_merge(start, edge, graph, facts, ops, ctg)
+        except PlanningError as exc:
+            _MERGES[key] = str(exc)
+    found = _MERGES[key]
+    if isinstance(found, str):
+        raise PlanningError(found)
+    return found
+
+
+def _search_merge(start: State, edge: Any, graph: TaskGraph, facts: dict[str, State], ops: list,
+                  ctg: dict[str, float]) -> tuple[str, list]:
     import networkx as nx
 
     nominal = nx.DiGraph((e.source, e.target) for e in graph.edges if e.kind == "nominal")
@@ -275,6 +294,7 @@ def _short(exc: Exception, limit: int = 800) -> str:
 
 def embedded_arrange(request: ArrangerRequest) -> ArrangerReply:
     """Monitors and recovery branches for every nominal edge, from the knowledge base and the planner."""
+    _MERGES.clear()
     try:
         graph = TaskGraph.from_data(request.graph)
     except GraphError as exc:
