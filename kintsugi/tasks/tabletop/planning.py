@@ -98,12 +98,7 @@ class Planner:
     def _linear(self, arm: str, start: tuple[np.ndarray, np.ndarray], goal: tuple[np.ndarray, np.ndarray],
                 seed: np.ndarray, what: str, label: str) -> Move:
         """A straight-line move with slerped orientation, as IK waypoints."""
-        p0, r0 = start
-        p1, r1 = goal
-        angle = Rotation.from_matrix(r0.T @ r1).magnitude()
-        dist = float(np.linalg.norm(p1 - p0))
-        n = max(1, math.ceil(dist / LINEAR_STEP_M), math.ceil(angle / LINEAR_STEP_RAD))
-        slerp = Slerp([0.0, 1.0], Rotation.from_matrix(np.stack([r0, r1])))
+        p0, p1, r1, angle, dist, n, slerp = _line(start, goal)
         qs, q = [], seed
         for i in range(1, n + 1):
             s = i / n
@@ -118,12 +113,7 @@ class Planner:
         """As much of a straight line as the arm follows on its own branch: the waypoints up to the first one
         that is unreachable or leaves the branch (BRANCH_JUMP_DEG); None when not even the first is. For moves
         that may stop short (backing an open hand away) and must never swing it."""
-        p0, r0 = start
-        p1, r1 = goal
-        angle = Rotation.from_matrix(r0.T @ r1).magnitude()
-        dist = float(np.linalg.norm(p1 - p0))
-        n = max(1, math.ceil(dist / LINEAR_STEP_M), math.ceil(angle / LINEAR_STEP_RAD))
-        slerp = Slerp([0.0, 1.0], Rotation.from_matrix(np.stack([r0, r1])))
+        p0, p1, r1, angle, dist, n, slerp = _line(start, goal)
         qs, q, s = [], seed, 0.0
         for i in range(1, n + 1):
             r = self.iks[arm].solve(p0 + i / n * (p1 - p0), slerp(i / n).as_matrix(), q)
@@ -277,3 +267,12 @@ class Planner:
         retreat = self._linear_prefix(a.arm, (low, rot), (retreat_pos, rot), lower.waypoints[-1], "retreat")
         return [Move([q_over], tcp=(over, rot), label="over place"), lower, Grip(False, "release"),
                 *([retreat] if retreat is not None else [])]
+
+
+def _line(start: tuple[np.ndarray, np.ndarray], goal: tuple[np.ndarray, np.ndarray]):  # noqa: ANN202
+    """A straight line between two tool poses: (p0, p1, r1, turn angle, distance, waypoint count, orientation slerp)."""
+    (p0, r0), (p1, r1) = start, goal
+    angle = Rotation.from_matrix(r0.T @ r1).magnitude()
+    dist = float(np.linalg.norm(p1 - p0))
+    n = max(1, math.ceil(dist / LINEAR_STEP_M), math.ceil(angle / LINEAR_STEP_RAD))
+    return p0, p1, r1, angle, dist, n, Slerp([0.0, 1.0], Rotation.from_matrix(np.stack([r0, r1])))
