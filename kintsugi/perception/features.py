@@ -131,8 +131,13 @@ def see_through(fit: Fit, views: Sequence[tuple[CameraModel, np.ndarray, np.ndar
     return see_through_shares(fit, views, cfg)[1]
 
 
-def see_through_shares(fit: Fit, views: Sequence[tuple[CameraModel, np.ndarray, np.ndarray]], cfg: FeatureConfig
-                       ) -> tuple[float, float]:
+def nearest_depths(views: Sequence[tuple[CameraModel, np.ndarray, np.ndarray]]) -> list[np.ndarray]:
+    """Each view's depth as the minimum over every pixel's 3x3 neighbourhood (once per view, not per fit)."""
+    return [cv2.erode(np.asarray(d, dtype=np.float32), np.ones((3, 3), np.uint8)) for _, d, _ in views]
+
+
+def see_through_shares(fit: Fit, views: Sequence[tuple[CameraModel, np.ndarray, np.ndarray]], cfg: FeatureConfig,
+                       nearest: Sequence[np.ndarray] | None = None) -> tuple[float, float]:
     """(share seen through in its pixel and all eight around it, share seen through in its own pixel).
 
     The first decides whether a fit is refused: a cup's 5 mm rim is a pixel or two
@@ -143,16 +148,15 @@ def see_through_shares(fit: Fit, views: Sequence[tuple[CameraModel, np.ndarray, 
     """
     pts = surface_samples(fit, cfg.inlier_tol)
     seen = bad_near = bad = 0
-    for cam, depth, _ in views:
+    nearest = nearest_depths(views) if nearest is None else nearest
+    for (cam, depth, _), near in zip(views, nearest):
         z = -((pts - cam.pos) @ cam.xmat[:, 2])
         pix = np.floor(cam.project(pts)).astype(np.int64)
         ok = (z > 1e-6) & (pix[:, 0] >= 0) & (pix[:, 0] < cam.width) & (pix[:, 1] >= 0) & (pix[:, 1] < cam.height)
-        d = np.asarray(depth, dtype=np.float32)
-        nearest = cv2.erode(d, np.ones((3, 3), np.uint8))  # the 3x3 minimum
         limit = z[ok] + cfg.see_through_tol
         seen += int(ok.sum())
-        bad += int(np.count_nonzero(d[pix[ok, 1], pix[ok, 0]] > limit))
-        bad_near += int(np.count_nonzero(nearest[pix[ok, 1], pix[ok, 0]] > limit))
+        bad += int(np.count_nonzero(np.asarray(depth)[pix[ok, 1], pix[ok, 0]] > limit))
+        bad_near += int(np.count_nonzero(near[pix[ok, 1], pix[ok, 0]] > limit))
     return (bad_near / seen, bad / seen) if seen else (0.0, 0.0)
 
 
@@ -198,7 +202,8 @@ def features(
     else:
         s = FitSettings(inlier_tol=cfg.inlier_tol)
         q = p[np.linspace(0, n - 1, cfg.fit_points).round().astype(np.int64)] if n > cfg.fit_points else p
-        seen = (lambda f: see_through_shares(f, views, cfg)) if views else None
+        near = nearest_depths(views) if views else None
+        seen = (lambda f: see_through_shares(f, views, cfg, near)) if views else None
         fit, rejected = fit_primitive(q, primitive, axes, s, seen, cfg.max_see_through)  # type: ignore[arg-type]
         if fit is None:
             note = f"{kind} fit contradicts the views" if rejected else f"{kind} fit did not converge"

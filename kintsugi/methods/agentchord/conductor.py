@@ -278,8 +278,7 @@ class Conductor:
             arm, objs = firing_arm(failed, firing), _guard_objects(g, edge.target)
             if arm is not None and objs:  # the edge may have nudged what the guards read (a hand rising home
                 self.wait_still(arm, objs, edge)  # past a bottle leaning on the held cup): read it at rest
-            nxt, matched = guarded_next_edge(g, edge.target, features(self.robot, _guard_objects(g, edge.target)),
-                                             self.ctg)
+            nxt, matched = guarded_next_edge(g, edge.target, features(self.robot, objs), self.ctg)
             if nxt is None:  # cannot happen on an Eq. 8-filtered graph: every recovery node merges
                 raise ConductorError(f"recovery node {edge.target!r} has no way back into the graph")
             if not matched:

@@ -33,13 +33,6 @@ retreat flip the wrist and knock the bottle it had just stood up over)."""
 
 
 
-def _down(yaw: float) -> np.ndarray:
-    """The gripper pointing down, its x axis along `yaw` (planning's `down_rotation`)."""
-    from kintsugi.tasks.tabletop.planning import down_rotation
-
-    return down_rotation(yaw)
-
-
 def _across(f: Any) -> float:
     """Half the perceived object's width across its axis."""
     if f.extent is None:
@@ -150,6 +143,7 @@ class EdgeSynthesis:
         from kintsugi.methods.agentchord.domain import UPEND_LIFT_M
         from kintsugi.methods.agentchord.tops import upright_hand
         from kintsugi.taskgraph.constraints import wrap_deg
+        from kintsugi.tasks.tabletop.planning import down_rotation
 
         arm, obj = call["arm"], call["obj"]
         turns_up = any(a.name == "rotate_eef" and a.args.get("axis") == "closing" for a in edge.actions)
@@ -173,7 +167,7 @@ class EdgeSynthesis:
         lifted = c + np.array([0.0, 0.0, UPEND_LIFT_M])
         best: tuple[tuple[int, float], float] | None = None
         for yaw in (yaw0, yaw0 + 180.0):
-            rot = _down(np.radians(yaw))
+            rot = down_rotation(np.radians(yaw))
             above = ik.solve(c + np.array([0.0, 0.0, 0.1]), rot, q0)
             grasp = ik.solve(c, rot, above.q) if above.ok else above
             lift = ik.solve(lifted, rot, grasp.q) if grasp.ok else grasp
