@@ -38,8 +38,8 @@ def test_a_drop_runs_the_precompiled_forward_recovery() -> None:
     first = next(i for i, s in enumerate(r.skills) if s.recovery)
     last = next(i for i in range(first, len(r.skills)) if not r.skills[i].recovery)
     chain = [s.skill for s in r.skills[first:last] if s.skill != "open_gripper"]
-    # The hub lets the bottle come to rest and raises the emptied hand home before the re-grasp.
-    assert chain == ["back", "grasp", "move_by_offset"]
+    # The hub lets the bottle come to rest; the re-grasp starts where the hand is (no trip home).
+    assert chain == ["grasp", "move_by_offset"]
     m = metrics_of(r)
     assert m.recoveries == len(r.transitions) and set(m.recovery_latency_steps) == {0}
     assert m.runtime_reasoning_calls == 0

@@ -100,7 +100,8 @@ def test_a_side_grasp_beside_a_held_cup_is_taken_from_the_facing_that_clears_it(
     from types import SimpleNamespace
 
     from kintsugi.methods.agentchord.keyframes import TabletopKeyframes
-    from kintsugi.methods.agentchord.synthesis import FINGER_CLEAR_M, EdgeSynthesis, _gap
+    from kintsugi.methods.agentchord.synthesis import FINGER_CLEAR_M, EdgeSynthesis
+    from kintsugi.tasks.tabletop.clearance import gap
     from kintsugi.methods.agentchord.tops import Heads, Tops
     from kintsugi.tasks.tabletop.planning import side_rotation
 
@@ -132,7 +133,7 @@ def test_a_side_grasp_beside_a_held_cup_is_taken_from_the_facing_that_clears_it(
     c = np.array(seen["bottle"].centroid)
     closing = side_rotation(np.radians(out["yaw_deg"]))[:, 1]
     fingers = [c + w * closing for w in (-0.05, 0.05)]
-    assert min(_gap(p, 0.085, 0.235, seen["cup"]) for p in fingers) >= FINGER_CLEAR_M
+    assert min(gap(p, 0.085, 0.235, seen["cup"]) for p in fingers) >= FINGER_CLEAR_M
     # With the cup moved away, the grasp is left as the composer gave it.
     seen["cup"] = upright("cup", 0.506, 0.2, 0.045, 0.118, 0.208)
     assert syn._clear_grasp_call(dict(call)) == call

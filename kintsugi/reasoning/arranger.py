@@ -34,16 +34,6 @@ MOVED_TOL_M = 0.03
 TOPPLE_TOL_DEG = 30.0
 RELEASE_COST = 10.0
 """Control steps of a recovery that only opens the hand (the failure already reached the merge node)."""
-CLEAR_M = 0.08
-CLEAR_COST = 200.0
-"""After a fall, the emptied hand rises this far straight up and goes home (about this many control steps)
-before anything reaches for the fallen object: it was dropped mid-carry, often right beside what the other
-hand holds up, and the joint-space move to a re-grasp pose from there swept the open fingers through that
-object (pour-dual: the held cup knocked out of the left hand) or through the fallen one. Up, not back along
-the approach: what fell lies below the hand, or leans on what the other hand holds (backing away dragged a
-bottle resting on the held cup off it)."""
-
-
 @dataclass(frozen=True)
 class FailureMode:
     """One entry of the knowledge base: when it applies, its monitor, and what it leaves behind."""
@@ -236,11 +226,11 @@ def _branch(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: Failure
     else:
         hub = f"r.{tag}.0"
         nodes = [{"id": hub, "description": f"after {mode.name}: {obj} at rest, released"}]
-        edges = [{"id": f"re.{tag}.0", "source": edge.source, "target": hub, "cost": RELEASE_COST + CLEAR_COST,
-                  "actions": [{"name": "open_gripper", "args": {"arm": arm}},
-                              {"name": "back", "args": {"arm": arm, "rise_m": CLEAR_M}}],
-                  "description": f"recovery for {mode.name}: let {obj} come to rest, raise the empty hand home, "
-                                 "then see how it lies"}]
+        # The hand stays where it is: the grasp that follows clears its own way in (it rises over what it would
+        # sweep through), so a fall costs no trip home.
+        edges = [{"id": f"re.{tag}.0", "source": edge.source, "target": hub, "cost": RELEASE_COST,
+                  "actions": [{"name": "open_gripper", "args": {"arm": arm}}],
+                  "description": f"recovery for {mode.name}: let {obj} come to rest, then see how it lies"}]
         misses = []
         for label, state, guard in outs:
             try:

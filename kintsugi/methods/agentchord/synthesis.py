@@ -12,6 +12,7 @@ from kintsugi.methods.agentchord.keyframes import TabletopKeyframes
 from kintsugi.methods.agentchord.observe import ARMS
 from kintsugi.methods.agentchord.tops import Heads, Tops
 from kintsugi.taskgraph.model import Edge, TaskGraph
+from kintsugi.tasks.tabletop.clearance import across, gap
 
 GRASP_Z_MIN_M = 0.029
 """A top-down grasp point is no lower than this (the pads' half length plus the table clearance)."""
@@ -31,28 +32,6 @@ JOINT_MARGIN_DEG = 30.0
 follows moves the base and turns the wrist's last roll with it (a roll left at its limit made the place's
 retreat flip the wrist and knock the bottle it had just stood up over)."""
 
-
-
-def _across(f: Any) -> float:
-    """Half the perceived object's width across its axis."""
-    if f.extent is None:
-        return 0.03
-    return float(max(f.extent[1], f.extent[2])) / 2.0
-
-
-def _gap(p: np.ndarray, z_lo: float, z_hi: float, o: Any) -> float:
-    """Horizontal clearance from point p (swept from z_lo to z_hi) to a perceived object, taken as a vertical
-    capsule around its axis ends' footprint with half its width as radius; +inf when their heights do not meet."""
-    top = o.extremes.get("top") if o.extremes else None
-    bottom = o.extremes.get("bottom") if o.extremes else None
-    if top is not None and bottom is not None and (z_hi < bottom[2] or z_lo > top[2]):
-        return float("inf")
-    ends = [o.extremes.get(k) for k in ("axis_pos", "axis_neg")] if o.extremes else [None, None]
-    a = np.array(ends[0] if ends[0] is not None else o.centroid, dtype=float)[:2]
-    b = np.array(ends[1] if ends[1] is not None else o.centroid, dtype=float)[:2]
-    d = b - a
-    t = 0.0 if float(d @ d) < 1e-12 else float(np.clip((p[:2] - a) @ d / (d @ d), 0.0, 1.0))
-    return float(np.linalg.norm(p[:2] - (a + t * d))) - _across(o)
 
 
 def region_centre(c: Any) -> tuple[float, float]:
@@ -259,7 +238,7 @@ class EdgeSynthesis:
         if not others:
             return call
         c = np.array(f.centroid, dtype=float)
-        radius = _across(f)
+        radius = across(f)
         base = np.asarray(self.robot.bases[arm], dtype=float)
         radial = float(np.arctan2(c[1] - base[1], c[0] - base[0]))
         pre = float(call.get("pre_grasp_offset", 0.08))
@@ -271,7 +250,7 @@ class EdgeSynthesis:
             pts = [c + s * approach + w * closing for s in np.linspace(-pre, FINGER_REACH_M, 6)
                    for w in (-FINGER_HALF_OPEN_M, FINGER_HALF_OPEN_M)]
             pts += [c + s * approach + w * closing for s in (0.0, FINGER_REACH_M) for w in (-radius, radius)]
-            return min(_gap(p, c[2] - 0.015, c[2] + 0.015 + rise, o) for p in pts for o in others)
+            return min(gap(p, c[2] - 0.015, c[2] + 0.015 + rise, o) for p in pts for o in others)
 
         if clearance(radial) >= FINGER_CLEAR_M:
             return call
@@ -279,13 +258,13 @@ class EdgeSynthesis:
         best, best_yaw = clearance(radial), None
         for swing in SIDE_SWINGS_DEG:
             yaw = radial + np.radians(swing)
-            gap = clearance(yaw)
-            if gap <= best + 1e-3:
+            room = clearance(yaw)
+            if room <= best + 1e-3:
                 continue
             rot = side_rotation(yaw)
             first = ik.solve(c - pre * rot[:, 2], rot, q)
             if first.ok and ik.solve(c, rot, first.q).ok:
-                best, best_yaw = gap, yaw
+                best, best_yaw = room, yaw
         if best_yaw is None:
             return call
         return {**call, "yaw_deg": round(float(np.degrees(best_yaw) + 180.0) % 360.0 - 180.0, 3)}

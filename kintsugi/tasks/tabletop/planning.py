@@ -19,6 +19,7 @@ from kintsugi.errors import KintsugiError
 from kintsugi.perception.features import ObjectFeatures
 from kintsugi.tasks.tabletop import actions as A
 from kintsugi.tasks.tabletop.arm_model import PAD_HALF
+from kintsugi.tasks.tabletop.clearance import gap, top_z
 from kintsugi.tasks.tabletop.config import TabletopConfig
 from kintsugi.tasks.tabletop.ik import ArmIK
 from kintsugi.tasks.tabletop.motion import Grip, Move, Step
@@ -36,6 +37,17 @@ BRANCH_JUMP_DEG = 45.0
 this far unless the IK solution left the arm's branch (a wrist flip: the seeded solve met a joint limit and
 the one from home won). The joint-space move between such waypoints is no straight line: it swings the hand
 through a half turn."""
+
+SWEEP_CLEAR_M = 0.015
+"""A joint-space move to a grasp's hover pose keeps the open hand this far from every perceived object, or the
+hand first rises straight up over them (and, if that is not enough, goes home). After a drop the empty hand is
+often right beside what fell or what the other hand holds up, and a joint-space move from there swept the open
+fingers through it (pour-dual: the held cup knocked out of the left hand)."""
+SWEEP_SAMPLES = 24
+RISE_MAX_M = 0.25
+HAND_HALF_OPEN_M = 0.05
+PALM_BACK_M = 0.035
+"""The open hand, as points about the tool centre: the pads' tips and roots either side, and the palm behind."""
 
 AXES = {"normal": 0, "closing": 1, "approach": 2}
 
@@ -233,7 +245,8 @@ class Planner:
         hover = pre.copy()
         hover[2] = max(pre[2], f.extremes["top"][2] + below + HOVER_CLEARANCE_M)
         q_hover = self._solve(a.arm, hover, rot, arm.q, f"the pose above {a.obj}")
-        steps: list[Step] = [Grip(False, "open"), Move([q_hover], tcp=(hover, rot), label=f"above {a.obj} {style}")]
+        steps: list[Step] = [Grip(False, "open"), *self._way_clear(a.arm, arm, q_hover, feats),
+                             Move([q_hover], tcp=(hover, rot), label=f"above {a.obj} {style}")]
         q_pre = q_hover
         if hover[2] > pre[2] + 1e-3:
             down = self._linear(a.arm, (hover, rot), (pre, rot), q_hover, f"the pre-grasp pose of {a.obj}",
@@ -244,6 +257,38 @@ class Planner:
             self._linear(a.arm, (pre, rot), (c, rot), q_pre, f"the grasp pose of {a.obj}", f"approach {a.obj}"),
             Grip(True, "close", ramp_s=a.close_s),
         ]
+
+    def _sweep_gap(self, arm: str, q0: np.ndarray, q1: np.ndarray, objs: list[ObjectFeatures]) -> float:
+        """The least clearance of the open hand to the objects along the joint-space line from q0 to q1."""
+        least = float("inf")
+        for s in np.linspace(0.0, 1.0, SWEEP_SAMPLES):
+            pos, rot = self.iks[arm].fk(q0 + s * (q1 - q0))
+            closing, approach = rot[:, 1], rot[:, 2]
+            pts = [pos + w * closing + t * approach for w in (-HAND_HALF_OPEN_M, HAND_HALF_OPEN_M)
+                   for t in (-PAD_HALF[2], PAD_HALF[2])] + [pos - PALM_BACK_M * approach]
+            least = min(least, *(gap(p, p[2] - PAD_HALF[0], p[2] + PAD_HALF[0], o) for p in pts for o in objs))
+        return least
+
+    def _way_clear(self, arm: str, view: ArmView, q_goal: np.ndarray, feats: dict) -> list[Step]:
+        """Steps that clear the way for a joint-space move to q_goal: none when it passes every perceived object
+        by SWEEP_CLEAR_M; else a straight rise over the tallest of them, and home as well when even the move
+        from up there would not pass."""
+        objs = [o for o in feats.values() if o.visible and o.centroid is not None]
+        if not objs or self._sweep_gap(arm, view.q, q_goal, objs) >= SWEEP_CLEAR_M:
+            return []
+        steps: list[Step] = []
+        q = view.q
+        up = min(max(top_z(o) for o in objs) + HOVER_CLEARANCE_M + PAD_HALF[2] - view.pos[2], RISE_MAX_M)
+        if up > 0.0:
+            rise = self._linear_prefix(arm, (view.pos, view.rot), (view.pos + np.array([0.0, 0.0, up]), view.rot), q,
+                                       "rise clear")
+            if rise is not None:
+                steps.append(rise)
+                q = rise.waypoints[-1]
+        if self._sweep_gap(arm, q, q_goal, objs) >= SWEEP_CLEAR_M:
+            return steps
+        home = self.iks[arm].home
+        return steps + [Move([home.copy()], tcp=self.iks[arm].fk(home), label="home")]
 
     def _place(self, a: A.Place, arm: ArmView, feats: dict) -> list[Step]:
         held = [k for k, n in arm.touching.items() if n == 2]

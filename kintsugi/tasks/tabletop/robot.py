@@ -202,6 +202,8 @@ class TabletopRobot:
         feats = None
         if any(p.action in NEEDS_FEATURES for p in parts):  # perceive only what the action refers to
             needed = {o for p in parts for o in p.objects}
+            if any(p.action == "grasp" for p in parts):  # its way in must clear every object, not just its own
+                needed |= set(self.objects)
             needed |= {k for p in parts if p.action == "place" for k in self._world.pad_contacts(p.arm)[0]}
             feats = self._perception.features(needed)
         self._planner.clipped = False
