@@ -1,0 +1,89 @@
+"""A grasp clears its own way in: the joint-space move to the pose above the object must not sweep the open hand
+through another perceived object (after a drop the empty hand is often right beside the cup the other hand holds
+up). When it would, the hand first rises straight up over the objects, and goes home as well when even that is not
+enough. Only perceived geometry is read."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from kintsugi.perception.features import ObjectFeatures
+from kintsugi.tasks.tabletop import actions as A
+from kintsugi.tasks.tabletop.config import TabletopConfig
+from kintsugi.tasks.tabletop.ik import ArmIK
+from kintsugi.tasks.tabletop.motion import Move
+from kintsugi.tasks.tabletop.planning import SWEEP_CLEAR_M, ArmView, Planner, side_rotation
+
+BASE = np.array([-0.05, -0.3, 0.0])
+
+
+@pytest.fixture(scope="module")
+def planner() -> Planner:
+    cfg = TabletopConfig()
+    side = SimpleNamespace(grasp="side_if_upright")
+    return Planner(cfg, {a: ArmIK(cfg.robot, cfg.motion, a) for a in ("left", "right")},
+                   {"bottle": side, "cup": side, "post": side})
+
+
+def _cylinder(name: str, x: float, y: float, z0: float, height: float, radius: float) -> ObjectFeatures:
+    top, bottom = (x, y, z0 + height), (x, y, z0)
+    return ObjectFeatures(name=name, visible=True, n_points=500, fit="primitive", centroid=(x, y, z0 + height / 2),
+                          axis=(0.0, 0.0, 1.0), extent=(height, 2 * radius, 2 * radius), tilt_deg=0.0, upright=True,
+                          extremes={"top": top, "bottom": bottom, "axis_pos": top, "axis_neg": bottom})
+
+
+def _hand_at(planner: Planner, xyz: tuple[float, float, float]) -> ArmView:
+    pos = np.array(xyz)
+    rot = side_rotation(float(np.arctan2(pos[1] - BASE[1], pos[0] - BASE[0])))
+    ik = planner.iks["right"]
+    r = ik.solve(pos, rot, ik.home)
+    assert r.ok
+    return ArmView(q=r.q, pos=pos, rot=rot, base=BASE, touching={})
+
+
+def _labels(steps: list) -> list[str]:
+    return [s.label for s in steps]
+
+
+BOTTLE = _cylinder("bottle", 0.35, -0.35, 0.0, 0.2, 0.03)
+HELD_CUP = _cylinder("cup", 0.45, -0.10, 0.12, 0.10, 0.04)  # held up by the other hand, beside the right one
+
+
+def test_from_home_with_nothing_in_the_way_the_grasp_goes_straight_in(planner: Planner) -> None:
+    home = planner.iks["right"].home
+    pos, rot = planner.iks["right"].fk(home)
+    view = ArmView(q=home.copy(), pos=pos, rot=rot, base=BASE, touching={})
+    steps = planner._grasp(A.Grasp(arm="right", obj="bottle"), view, {"bottle": BOTTLE})
+    assert _labels(steps) == ["open", "above bottle side-on (upright)", "pre-grasp bottle", "approach bottle", "close"]
+
+
+def test_a_hand_beside_the_held_cup_rises_over_it_first(planner: Planner) -> None:
+    view = _hand_at(planner, (0.45, -0.20, 0.12))
+    feats = {"bottle": BOTTLE, "cup": HELD_CUP}
+    hover = next(s for s in planner._grasp(A.Grasp(arm="right", obj="bottle"), view, {}) if s.label.startswith("above"))
+    assert planner._sweep_gap("right", view.q, hover.waypoints[-1], [HELD_CUP, BOTTLE]) < SWEEP_CLEAR_M  # premise
+    steps = planner._grasp(A.Grasp(arm="right", obj="bottle"), view, feats)
+    assert _labels(steps)[:3] == ["open", "rise clear", "above bottle side-on (upright)"]
+    rise = steps[1]
+    assert isinstance(rise, Move)
+    assert np.allclose(rise.tcp[0][:2], view.pos[:2], atol=1e-9) and rise.tcp[0][2] > 0.22  # straight up, over the cup
+    assert np.allclose(rise.tcp[1], view.rot)
+    assert planner._sweep_gap("right", rise.waypoints[-1], steps[2].waypoints[-1], [HELD_CUP, BOTTLE]) >= SWEEP_CLEAR_M
+
+
+def test_when_rising_is_not_enough_the_hand_goes_home_first(planner: Planner) -> None:
+    view = _hand_at(planner, (0.45, -0.20, 0.12))
+    post = _cylinder("post", 0.40, -0.28, 0.0, 0.8, 0.04)  # taller than any rise, between the hand and the bottle
+    steps = planner._grasp(A.Grasp(arm="right", obj="bottle"), view, {"bottle": BOTTLE, "post": post})
+    assert _labels(steps)[:4] == ["open", "rise clear", "home", "above bottle side-on (upright)"]
+
+
+def test_an_object_the_cameras_lost_is_no_obstacle(planner: Planner) -> None:
+    view = _hand_at(planner, (0.45, -0.20, 0.12))
+    lost = ObjectFeatures(name="cup", visible=False, n_points=0, fit="raw", note="occluded")
+    plain = planner._grasp(A.Grasp(arm="right", obj="bottle"), view, {"bottle": BOTTLE})
+    steps = planner._grasp(A.Grasp(arm="right", obj="bottle"), view, {"bottle": BOTTLE, "cup": lost})
+    assert _labels(steps) == _labels(plain)
