@@ -63,7 +63,8 @@ def test_from_home_with_nothing_in_the_way_the_grasp_goes_straight_in(planner: P
 def test_a_hand_beside_the_held_cup_rises_over_it_first(planner: Planner) -> None:
     view = _hand_at(planner, (0.45, -0.20, 0.12))
     feats = {"bottle": BOTTLE, "cup": HELD_CUP}
-    hover = next(s for s in planner._grasp(A.Grasp(arm="right", obj="bottle"), view, {}) if s.label.startswith("above"))
+    hover = next(s for s in planner._grasp(A.Grasp(arm="right", obj="bottle"), view, {"bottle": BOTTLE})
+                 if s.label.startswith("above"))
     assert planner._sweep_gap("right", view.q, hover.waypoints[-1], [HELD_CUP, BOTTLE]) < SWEEP_CLEAR_M  # premise
     steps = planner._grasp(A.Grasp(arm="right", obj="bottle"), view, feats)
     assert _labels(steps)[:3] == ["open", "rise clear", "above bottle side-on (upright)"]
