@@ -47,7 +47,7 @@ def test_inner_monologue_verifies_every_subgoal_at_run_time() -> None:
 
 @pytest.mark.parametrize("method", ["doremi", "code-as-monitor"])
 def test_a_drop_makes_the_reasoner_plan_again(method: str) -> None:
-    r = _trial(method, 3)  # the bottle drops at the end of the lift
+    r = _trial(method, 22)  # the bottle drops during the lift
     m = metrics_of(r)
     assert r.success and r.framework_success
     assert [e.detail for e in r.events if e.kind == "replan"] and m.recoveries == 1
@@ -104,7 +104,7 @@ def test_a_replanned_stand_up_gets_monitors_the_constraints_accept() -> None:
 
 def test_a_baseline_replans_a_fallen_bottle_with_what_it_saw_first() -> None:
     r = run_trial(TrialSpec(task="pour-dual", method="inner-monologue", variant="default", condition="drop",
-                            seed=0, overrides={"disturbance.drop_p": 0.1}))  # seed 0: the bottle drops and lies
+                            seed=47, overrides={"disturbance.drop_p": 0.1}))  # seed 47: the bottle drops and lies
     assert "never achievable" not in (r.error or "")
     composers = [c for c in r.transcript if c["role"] == "composer"]
     assert len(composers) >= 2 and not composers[0]["request"].get("first_objects")
@@ -115,8 +115,9 @@ def test_a_baseline_replans_a_fallen_bottle_with_what_it_saw_first() -> None:
 def test_a_baseline_keeps_the_robots_memory_of_tops_across_replans() -> None:
     """Which end of a fallen bottle is its top is the robot's own memory (AgentChord keeps it for the whole
     trial); a re-plan must not forget it, or standing the bottle up turns the hand a fixed quarter turn the arm
-    does not reach (seed 6: KeyframeError on the stand-up's rotate_eef)."""
+    does not reach (seed 6 of the earlier drop draws: KeyframeError on the stand-up's rotate_eef; seed 43 now
+    drops the bottle during the pour, and the re-plan sets the cup down and stands the bottle up)."""
     r = run_trial(TrialSpec(task="pour-dual", method="inner-monologue", variant="default", condition="drop",
-                            seed=6, overrides={"disturbance.drop_p": 0.1}))
+                            seed=43, overrides={"disturbance.drop_p": 0.1}))
     assert r.error is None
     assert any(e.kind == "replan" for e in r.events)

@@ -1,5 +1,5 @@
-"""Trajectory export: a one-trial agentchord campaign with a drop (pour-single, seed 3 drops the bottle at the
-end of the lift and the pre-compiled branch re-grasps; later drops may follow, as the actions' draws fall), re-run and written as robomimic HDF5 and LeRobot v2.1;
+"""Trajectory export: a one-trial agentchord campaign with a drop (pour-single, seed 22 drops the bottle during
+the lift and the pre-compiled branch re-grasps; later drops may follow, as the actions' draws fall), re-run and written as robomimic HDF5 and LeRobot v2.1;
 files read back. A record the re-run does not reproduce is refused; bad filters and rates are one-line errors."""
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from kintsugi.trial import SkillLog, TrialRecord
 h5py = pytest.importorskip("h5py")
 pq = pytest.importorskip("pyarrow.parquet")
 
-SEED = 3
+SEED = 22
 KEY = f"pour-single/agentchord/default/drop/{SEED}"
 
 

@@ -90,3 +90,23 @@ def test_disturbance_draws_do_not_depend_on_the_other_disturbances() -> None:
     assert a.distance == b.distance and a._fire_in == b._fire_in
     assert a.distance != c.distance
     world.close()
+
+
+def test_a_drop_draws_only_for_actions_that_start_with_an_object_in_hand() -> None:
+    """The k-th carrying action of every method meets the same draws: empty-handed actions (waits, trips home,
+    whose number differs between methods) draw nothing, so they cannot shift the later draws."""
+    from kintsugi.tasks.tabletop.conditions import DropDisturbance
+
+    world = _world(("bottle",))
+    quiet, busy = DropDisturbance(world, 1.0, 0.3, seed=3), DropDisturbance(world, 1.0, 0.3, seed=3)
+    for _ in range(5):  # nothing in hand: no draws, nothing pending
+        busy.begin_action(1.0, ("right",))
+        assert busy._pending is None
+    robot = TabletopRobot(world)
+    assert robot.execute({"action": "grasp", "arm": "right", "obj": "bottle"}).reached
+    assert "bottle" in world.pad_contacts("right")[0]
+    quiet.begin_action(1.0, ("right",))
+    busy.begin_action(1.0, ("right",))
+    assert busy._pending is not None and busy._pending == quiet._pending  # p = 1: a drop, at the same instant
+    assert busy._rng.random() == quiet._rng.random()  # same draws consumed
+    world.close()

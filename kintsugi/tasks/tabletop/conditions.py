@@ -90,9 +90,13 @@ def _separated(poses: dict[str, StartPose], cfg: TabletopConfig, gap: float) -> 
 
 
 class DropDisturbance:
-    """With probability p per atomic action, the held object is let go at a random instant of it.
+    """With probability p per atomic action that starts with an object in hand, the held object is let go at a
+    random instant of it.
 
-    Two random numbers are drawn per action whatever happens, so the draws stay paired."""
+    Two random numbers are drawn per such action whatever happens, so the k-th carrying action of every method
+    meets the same draws. Actions that start empty-handed draw nothing: they have nothing to drop (of 150 drops
+    measured when they did draw, one fell in a grasp's last instant), and their number differs between methods
+    (waits for a fallen object to settle, trips home), which shifted every later draw and unpaired the trials."""
 
     def __init__(self, world: TabletopWorld, p: float, release_s: float, seed: int) -> None:
         self._world = world
@@ -103,6 +107,9 @@ class DropDisturbance:
         self.events: list[tuple[float, str]] = []
 
     def begin_action(self, planned_s: float, arms: tuple[str, ...]) -> None:
+        self._pending = None
+        if not any(n == 2 for arm in arms for n in self._world.pad_contacts(arm)[0].values()):
+            return
         hit, when = self._rng.random(), self._rng.random()
         self._pending = (self._world.data.time + when * planned_s, arms) if hit < self.p else None
 
