@@ -201,3 +201,72 @@ def test_progress_bar_renders(tmp_path):
     run_campaign(cfg(trials=2), tmp_path, executor="inline", console=Console(file=buf, width=120))
     text = buf.getvalue()
     assert "16/16" in text and "resuming" in text and "errors" in text
+
+
+def _children(pid: int) -> set[int]:
+    """Live processes whose parent is pid (from /proc)."""
+    out = set()
+    for d in Path("/proc").iterdir():
+        if d.name.isdigit():
+            try:
+                fields = (d / "stat").read_text().rsplit(")", 1)[1].split()
+            except OSError:
+                continue
+            if int(fields[1]) == pid and fields[0] != "Z":
+                out.add(int(d.name))
+    return out
+
+
+def _alive(pid: int) -> bool:
+    try:
+        return (Path("/proc") / str(pid) / "stat").read_text().rsplit(")", 1)[1].split()[0] != "Z"
+    except OSError:
+        return False
+
+
+def _running_process_campaign(tmp_path) -> tuple[subprocess.Popen, set[int]]:
+    """A process-executor campaign of slow fake trials in a child process, started and holding workers."""
+    c = cfg(variants=["hangs"], conditions=["easy"], methods=["baseline"], trials=3)
+    (tmp_path / "cfg.json").write_text(c.model_dump_json())
+    script = (
+        "import sys; from pathlib import Path; "
+        "from kintsugi.campaign.plan import CampaignConfig; from kintsugi.campaign.runner import run_campaign; "
+        "run_campaign(CampaignConfig.model_validate_json(Path(sys.argv[1]).read_text()), sys.argv[2], "
+        "workers=2, executor='process', progress=False)"
+    )
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.Popen([sys.executable, "-c", script, str(tmp_path / "cfg.json"), str(tmp_path / "out")],
+                            cwd=ROOT, env=env)
+    results = tmp_path / "out" / "results.jsonl"
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline and not (results.exists() and results.read_bytes().count(b"\n") >= 1):
+        time.sleep(0.05)  # seed 0 done in 0.3 s; seed 1 sleeps 60 s in its worker
+    workers = {p for p in _children(proc.pid) if "spawn_main" in (Path("/proc") / str(p) / "cmdline").read_text()}
+    assert proc.poll() is None and workers, "the campaign should be running with its workers"
+    return proc, workers
+
+
+def _gone(pids: set[int], within_s: float) -> bool:
+    deadline = time.monotonic() + within_s
+    while time.monotonic() < deadline:
+        if not any(_alive(p) for p in pids):
+            return True
+        time.sleep(0.05)
+    return False
+
+
+def test_sigterm_stops_the_campaign_and_its_workers(tmp_path):
+    proc, workers = _running_process_campaign(tmp_path)
+    proc.send_signal(signal.SIGTERM)
+    assert proc.wait(timeout=20) == 128 + signal.SIGTERM  # unwound (SystemExit), not struck dead (-15)
+    assert _gone(workers, 5.0), "a terminated campaign must not leave its workers running"
+
+
+def test_workers_of_a_killed_campaign_exit_on_their_own(tmp_path):
+    """SIGKILL runs no handler in the campaign process: each worker notices it is orphaned and exits."""
+    from kintsugi.campaign.executors import ORPHAN_POLL_S
+
+    proc, workers = _running_process_campaign(tmp_path)
+    proc.send_signal(signal.SIGKILL)
+    proc.wait()
+    assert _gone(workers, 10 * ORPHAN_POLL_S + 2.0), "orphaned workers must exit"

@@ -18,8 +18,10 @@ import importlib
 import multiprocessing
 import os
 import signal
+import threading
 import time
 from collections import deque
+from contextlib import contextmanager
 from concurrent.futures import FIRST_COMPLETED, Future, ProcessPoolExecutor, wait
 from concurrent.futures.process import BrokenProcessPool
 from typing import Callable, Iterable, Iterator, Protocol
@@ -58,20 +60,53 @@ def run_in_worker(spec: TrialSpec, plugins: list[str]) -> TrialRecord:
     return run_trial(spec)
 
 
-def _ignore_sigint() -> None:
+ORPHAN_POLL_S = 0.5
+
+
+def _worker_init() -> None:
     """Ctrl-C is the main process's to handle (it stops the pool); a worker must not turn it
-    into a recorded 'KeyboardInterrupt' failure of the trial it was running."""
+    into a recorded 'KeyboardInterrupt' failure of the trial it was running. And a worker whose
+    campaign process is gone (killed with SIGKILL, or crashed) exits instead of running on alone:
+    nothing would record its trial, and it would hold a core."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    parent = os.getppid()
+
+    def watch() -> None:
+        while os.getppid() == parent:
+            time.sleep(ORPHAN_POLL_S)
+        os._exit(1)
+
+    threading.Thread(target=watch, name="orphan-watch", daemon=True).start()
+
+
+@contextmanager
+def _terminate_as_exit() -> Iterator[None]:
+    """SIGTERM (`kill`, a cluster's job stop) unwinds like Ctrl-C, so the pools are killed on the way
+    out; Python's default would end the process at once and leave the workers running."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+
+    def stop(signum: int, frame: object) -> None:
+        raise SystemExit(128 + signum)
+
+    previous = signal.signal(signal.SIGTERM, stop)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def _kill(pool: ProcessPoolExecutor) -> None:
-    """Stop a pool now, running trials included (Python 3.14 has kill_workers; older ones do not)."""
-    pool.shutdown(wait=False, cancel_futures=True)
+    """Stop a pool now, running trials included (Python 3.14 has kill_workers; older ones do not).
+    The workers are read before the shutdown, which forgets them (`_processes = None`)."""
     kill = getattr(pool, "kill_workers", None)
     if kill is not None:
-        kill()
+        kill()  # shuts the pool down too
         return
-    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+    procs = list((getattr(pool, "_processes", None) or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for proc in procs:
         if proc.is_alive():
             proc.kill()
 
@@ -136,7 +171,7 @@ class ProcessExecutor:
         imports the plugins and the built-in tasks, so a trial's timeout counts the
         trial, not the imports) closes that gap.
         """
-        pool = ProcessPoolExecutor(max_workers=workers, mp_context=self._ctx, initializer=_ignore_sigint)
+        pool = ProcessPoolExecutor(max_workers=workers, mp_context=self._ctx, initializer=_worker_init)
         warmups = [pool.submit(warm_up, self.plugins) for _ in range(workers)]
         wait(warmups)
         if any(isinstance(f.exception(), BrokenProcessPool) for f in warmups):
@@ -148,6 +183,10 @@ class ProcessExecutor:
         return pool
 
     def run(self, specs: Iterable[TrialSpec]) -> Iterator[tuple[TrialSpec, TrialRecord]]:
+        with _terminate_as_exit():
+            yield from self._run(specs)
+
+    def _run(self, specs: Iterable[TrialSpec]) -> Iterator[tuple[TrialSpec, TrialRecord]]:
         queue = deque(specs)
         if not queue:
             return
