@@ -81,6 +81,12 @@ def proprioceptive(check: Any) -> bool:
     return all(role == "arm" or feature is None for _, role, feature in check.refs())
 
 
+def _moves(edge: Edge) -> bool:
+    """The edge moves an arm (anything but opening a hand, which the settle before it has just done while the
+    objects came to rest)."""
+    return any(a.name != "open_gripper" for a in edge.actions)
+
+
 def _guard_objects(graph: TaskGraph, node: str) -> set[str]:
     return {e for x in graph.out_edges(node) for c in x.guard for e, role, _ in c.refs() if role != "arm"}
 
@@ -276,8 +282,8 @@ class Conductor:
             if g.node(edge.target).kind == "nominal":
                 return edge.target
             arm, objs = firing_arm(failed, firing), _guard_objects(g, edge.target)
-            if arm is not None and objs:  # the edge may have nudged what the guards read (a hand rising home
-                self.wait_still(arm, objs, edge)  # past a bottle leaning on the held cup): read it at rest
+            if arm is not None and objs and _moves(edge):  # the edge may have nudged what the guards read (a hand
+                self.wait_still(arm, objs, edge)  # rising past a bottle leaning on the held cup): read it at rest
             nxt, matched = guarded_next_edge(g, edge.target, features(self.robot, objs), self.ctg)
             if nxt is None:  # cannot happen on an Eq. 8-filtered graph: every recovery node merges
                 raise ConductorError(f"recovery node {edge.target!r} has no way back into the graph")
