@@ -1,6 +1,7 @@
 """Table I figures of a system-B campaign (one results.jsonl): per method, ground-truth success with a Wilson
 95 % interval, mean episode steps, sim time, execution time (sim + measured reasoning), modelled execution
-time (sim + calls x 5 s), reasoning calls after planning, recoveries, recovery latency (firing -> first
+time (sim + calls x 5 s), the steps and modelled time of the trials it completed (the paper's "steps executed
+to complete a task"), reasoning calls after planning, recoveries, recovery latency (firing -> first
 recovery command), and detection delay (a drop -> the monitor's firing or the replan, in 10 ms control steps:
 monitors that read the pads run every control step, so for them it is about the persistence window; checks
 made by a verifier at sub-goals see the drop only when the action ends).
@@ -77,8 +78,17 @@ def paired(rs: list, reference: list) -> str:
     if not pairs or rs[0].method == "agentchord":
         return "-"
     return (f"{mean(a.episode_steps for a, _ in pairs):.0f} vs {mean(b.episode_steps for _, b in pairs):.0f} / "
-            f"{mean(a.execution_time_s for a, _ in pairs):.1f} vs {mean(b.execution_time_s for _, b in pairs):.1f} "
-            f"({len(pairs)})")
+            f"{mean(a.execution_time_s for a, _ in pairs):.1f} vs {mean(b.execution_time_s for _, b in pairs):.1f} / "
+            f"{mean(a.modelled_execution_time_s for a, _ in pairs):.1f} vs "
+            f"{mean(b.modelled_execution_time_s for _, b in pairs):.1f} ({len(pairs)})")
+
+
+def completed(rs: list) -> str:
+    """Mean steps and modelled execution time over the trials the method completed (succeeded)."""
+    done = [m for r in rs if r.success and (m := metrics_of(r)) is not None]
+    if not done:
+        return "-"
+    return f"{mean(m.episode_steps for m in done):.0f} / {mean(m.modelled_execution_time_s for m in done):.1f}"
 
 
 def main() -> None:
@@ -94,9 +104,9 @@ def main() -> None:
             groups[(r.condition, r.params.get("drop_p"), r.method)].append(r)
         print(f"## {out}")
         print("| condition | p | method | n | success % [95% CI] | steps | sim s | exec s | modelled s | runtime calls "
-              "| recoveries | latency steps | detect delay steps (mean, n) | errors | steps / exec s where it and "
-              "agentchord both succeed: it vs agentchord (n) |")
-        print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
+              "| completed: steps / modelled s | recoveries | latency steps | detect delay steps (mean, n) | errors "
+              "| steps / exec s / modelled s where it and agentchord both succeed: it vs agentchord (n) |")
+        print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
         for (cond, p, method), rs in sorted(groups.items(), key=lambda kv: (str(kv[0][0]), str(kv[0][1]), kv[0][2])):
             ms = [metrics_of(r) for r in rs]
             have = [m for m in ms if m is not None]
@@ -109,7 +119,7 @@ def main() -> None:
                   f"{mean(m.execution_time_s for m in have) if have else float('nan'):.1f} | "
                   f"{mean(m.modelled_execution_time_s for m in have) if have else float('nan'):.1f} | "
                   f"{mean(m.runtime_reasoning_calls for m in have) if have else float('nan'):.1f} | "
-                  f"{sum(m.recoveries for m in have)} | {max(lat) if lat else '-'} | {delay} | "
+                  f"{completed(rs)} | {sum(m.recoveries for m in have)} | {max(lat) if lat else '-'} | {delay} | "
                   f"{sum(1 for r in rs if r.error)} | {paired(rs, reference[(rs[0].task, cond, p)])} |")
 
 
