@@ -87,3 +87,14 @@ def test_backtracking_baselines_go_back_to_a_subgoal_that_holds(method: str, cal
     m = metrics_of(r)
     assert m.planning_reasoning_calls == calls == len(r.transcript) and m.runtime_reasoning_calls == 0
     assert m.recoveries == 1 and not any(s.recovery for s in r.skills)  # re-runs nominal edges, no branch
+
+
+def test_an_object_that_left_the_cameras_view_ends_the_trial_with_the_reason() -> None:
+    """handover-block seed 1: the dropped block bounces off the table. The re-grasp cannot be planned (nothing
+    moves); running it again in the same still scene would only be refused again, so the trial ends at once,
+    recorded with the planner's reason, instead of spending its recoveries on grasps that never start."""
+    r = run_trial(TrialSpec(task="handover-block", method="agentchord", variant="default", condition="drop", seed=1,
+                            overrides={"disturbance.drop_p": 0.1}))
+    assert not r.success and r.error is not None
+    assert "grasp cannot be carried out" in r.error and "not visible" in r.error
+    assert metrics_of(r).recoveries == 1

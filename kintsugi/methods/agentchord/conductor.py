@@ -381,6 +381,9 @@ class Conductor:
                      f"[/bold] -> {flag} ({escape(result.message)})", markup=True)
         if result.ik_failed:
             raise KeyframeError(f"{edge.id} {name}: {result.message}")
+        if not result.planned:  # e.g. the object left the cameras' view (fell off the table): nothing moved, and
+            # running it again in the same still scene would only refuse again
+            raise ConductorError(f"{edge.id} {name} cannot be carried out: {result.message}")
 
     def _keyframe_call(self, edge: Edge, call: dict) -> dict:
         arm = call["arm"]

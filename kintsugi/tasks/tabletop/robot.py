@@ -64,6 +64,8 @@ class ActionResult(StrictModel):
     arms: tuple[str, ...]
     reached: bool
     """Every move of the action ended at its target (within motion.reach_tol_*), settled."""
+    planned: bool = True
+    """False when the action could not be planned (unreachable, or its object not seen): nothing moved."""
     ik_failed: bool = False
     clipped: bool = False
     interrupted: bool = False
@@ -210,7 +212,7 @@ class TabletopRobot:
         try:
             programs = {p.arm: self._planner.plan(p, self._arm_view(p.arm), feats) for p in parts}
         except PlanError as exc:
-            return ActionResult(action=action.action, arms=arms, reached=False, ik_failed=exc.ik_failed,
+            return ActionResult(action=action.action, arms=arms, reached=False, planned=False, ik_failed=exc.ik_failed,
                                 clipped=exc.clipped, message=str(exc))
         if self._hook is not None:
             planned = max(planned_duration(s, self._world.joint_targets(a), self._motion) for a, s in programs.items())
