@@ -272,15 +272,12 @@ class Conductor:
         the same recovery again, since the failure context and its predicted state are the same."""
         g = self.graph
         edge = g.edge(firing.recovery)
-        opened = self._settle(failed, edge, firing)  # the caller's re-run after a disturbed recovery settles here too
-        # A first edge that only opens the hand the settle has just held open is done (and its node checks nothing).
-        done = (opened is not None and not g.node(edge.target).constraints
-                and all(a.name == "open_gripper" and a.args.get("arm") == opened for a in edge.actions))
+        self._settle(failed, edge, firing)
         while True:
-            again = None if done else self._run_watched(edge)
-            done = False
+            again = self._run_watched(edge)
             if again is not None:
                 self.log.event(self.robot.sim_time, "recovery disturbed", f"{edge.id}: {again}; run it again")
+                self._settle(failed, edge, firing)
                 return None
             if g.node(edge.target).kind == "nominal":
                 return edge.target
@@ -317,17 +314,14 @@ class Conductor:
             return f"{edge.target!r}: {bad} violated"
         return None
 
-    def _settle(self, failed: Edge, recovery: Edge, firing: Firing) -> str | None:
+    def _settle(self, failed: Edge, recovery: Edge, firing: Firing) -> None:
         """Open the failing arm's gripper and keep it open until the objects its monitors watch have come to
         rest (two reads within SETTLE_M), so the recovery's perception-conditioned actions (a re-grasp) aim
         at where a dropped object lies, not where it was falling. Only the arm whose monitor fired: the other
-        may still hold its own object (opening it dropped a fork while the spoon was recovered). Returns the arm
-        it opened, if any."""
-        arm, objs = firing_arm(failed, firing), _objects_of(failed)
-        if arm is None or not objs:
-            return None
-        self.wait_still(arm, objs, recovery)
-        return arm
+        may still hold its own object (opening it dropped a fork while the spoon was recovered)."""
+        arm = firing_arm(failed, firing)
+        if arm is not None:
+            self.wait_still(arm, _objects_of(failed), recovery)
 
     def wait_still(self, arm: str, objs: set[str], edge: Edge) -> bool:
         """True once the objects are at rest; False if they still move after SETTLE_TRIES reads."""
