@@ -68,19 +68,24 @@ def test_resume_after_kill_with_torn_line(tmp_path):
     assert (out / "results.jsonl").read_bytes() == before
 
 
-def test_real_sigkill_then_resume(tmp_path):
-    """Kill a running campaign process at an arbitrary moment; the rerun completes it exactly once."""
-    c = cfg(variants=["slow"], conditions=["easy"], trials=20)
+def _campaign_process(tmp_path, c, options: str) -> subprocess.Popen:
+    """`run_campaign(c, tmp_path / "out", <options>)` in a child Python process (to be killed by the test)."""
     (tmp_path / "cfg.json").write_text(c.model_dump_json())
     script = (
         "import sys; from pathlib import Path; "
         "from kintsugi.campaign.plan import CampaignConfig; from kintsugi.campaign.runner import run_campaign; "
         "run_campaign(CampaignConfig.model_validate_json(Path(sys.argv[1]).read_text()), sys.argv[2], "
-        "executor='inline', progress=False)"
+        f"{options}, progress=False)"
     )
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    proc = subprocess.Popen([sys.executable, "-c", script, str(tmp_path / "cfg.json"), str(tmp_path / "out")],
+    return subprocess.Popen([sys.executable, "-c", script, str(tmp_path / "cfg.json"), str(tmp_path / "out")],
                             cwd=ROOT, env=env)
+
+
+def test_real_sigkill_then_resume(tmp_path):
+    """Kill a running campaign process at an arbitrary moment; the rerun completes it exactly once."""
+    c = cfg(variants=["slow"], conditions=["easy"], trials=20)
+    proc = _campaign_process(tmp_path, c, "executor='inline'")
     results = tmp_path / "out" / "results.jsonl"
     deadline = time.monotonic() + 15
     while time.monotonic() < deadline and proc.poll() is None:
@@ -227,16 +232,7 @@ def _alive(pid: int) -> bool:
 def _running_process_campaign(tmp_path) -> tuple[subprocess.Popen, set[int]]:
     """A process-executor campaign of slow fake trials in a child process, started and holding workers."""
     c = cfg(variants=["hangs"], conditions=["easy"], methods=["baseline"], trials=3)
-    (tmp_path / "cfg.json").write_text(c.model_dump_json())
-    script = (
-        "import sys; from pathlib import Path; "
-        "from kintsugi.campaign.plan import CampaignConfig; from kintsugi.campaign.runner import run_campaign; "
-        "run_campaign(CampaignConfig.model_validate_json(Path(sys.argv[1]).read_text()), sys.argv[2], "
-        "workers=2, executor='process', progress=False)"
-    )
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    proc = subprocess.Popen([sys.executable, "-c", script, str(tmp_path / "cfg.json"), str(tmp_path / "out")],
-                            cwd=ROOT, env=env)
+    proc = _campaign_process(tmp_path, c, "workers=2, executor='process'")
     results = tmp_path / "out" / "results.jsonl"
     deadline = time.monotonic() + 60
     while time.monotonic() < deadline and not (results.exists() and results.read_bytes().count(b"\n") >= 1):
