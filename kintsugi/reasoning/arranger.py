@@ -34,6 +34,8 @@ MOVED_TOL_M = 0.03
 TOPPLE_TOL_DEG = 30.0
 RELEASE_COST = 10.0
 """Control steps of a recovery that only opens the hand (the failure already reached the merge node)."""
+
+
 @dataclass(frozen=True)
 class FailureMode:
     """One entry of the knowledge base: when it applies, its monitor, and what it leaves behind."""

@@ -183,14 +183,13 @@ class Planner:
         return [Grip(True, "close", ramp_s=a.close_s)]
 
     def _back(self, a: A.Back, arm: ArmView, feats: dict) -> list[Step]:
-        home = self.iks[a.arm].home
         steps: list[Step] = []
         if a.rise_m > 0.0:
             out = self._linear_prefix(a.arm, (arm.pos, arm.rot), (arm.pos + np.array([0.0, 0.0, a.rise_m]), arm.rot),
                                       arm.q, "rise")
             if out is not None:
                 steps.append(out)
-        return steps + [Move([home.copy()], tcp=self.iks[a.arm].fk(home), label="home")]
+        return steps + [self._home(a.arm)]
 
     def _move_to_target(self, a: A.MoveToTarget, arm: ArmView, feats: dict) -> list[Step]:
         rot = rpy_matrix(a.rpy_deg) if a.rpy_deg is not None else arm.rot
@@ -277,18 +276,19 @@ class Planner:
         if not objs or self._sweep_gap(arm, view.q, q_goal, objs) >= SWEEP_CLEAR_M:
             return []
         steps: list[Step] = []
-        q = view.q
         up = min(max(top_z(o) for o in objs) + HOVER_CLEARANCE_M + PAD_HALF[2] - view.pos[2], RISE_MAX_M)
         if up > 0.0:
-            rise = self._linear_prefix(arm, (view.pos, view.rot), (view.pos + np.array([0.0, 0.0, up]), view.rot), q,
-                                       "rise clear")
+            rise = self._linear_prefix(arm, (view.pos, view.rot), (view.pos + np.array([0.0, 0.0, up]), view.rot),
+                                       view.q, "rise clear")
             if rise is not None:
+                if self._sweep_gap(arm, rise.waypoints[-1], q_goal, objs) >= SWEEP_CLEAR_M:
+                    return [rise]
                 steps.append(rise)
-                q = rise.waypoints[-1]
-        if self._sweep_gap(arm, q, q_goal, objs) >= SWEEP_CLEAR_M:
-            return steps
+        return steps + [self._home(arm)]
+
+    def _home(self, arm: str) -> Move:
         home = self.iks[arm].home
-        return steps + [Move([home.copy()], tcp=self.iks[arm].fk(home), label="home")]
+        return Move([home.copy()], tcp=self.iks[arm].fk(home), label="home")
 
     def _place(self, a: A.Place, arm: ArmView, feats: dict) -> list[Step]:
         held = [k for k, n in arm.touching.items() if n == 2]
