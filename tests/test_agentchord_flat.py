@@ -1,4 +1,4 @@
-"""Lying flat (rearrange-table): a gentle close keeps a thin utensil flat under a top-down grasp, and `flat` has a
+"""Lying flat (rearrange-table): a top-down grasp keeps a thin utensil flat under a top-down grasp, and `flat` has a
 constraint over perceived features, so a utensil on its side fails the method's own goal check."""
 
 from __future__ import annotations
@@ -15,10 +15,11 @@ def _roll_deg(world, obj: str) -> float:
     return float(np.degrees(np.arccos(np.clip(1 - 2 * (x * x + y * y), -1.0, 1.0))))
 
 
-@pytest.mark.parametrize("close_s, rolls", [(0.0, True), (0.2, False)])
-def test_a_gentle_close_keeps_a_spoon_flat(close_s: float, rolls: bool) -> None:
-    """rearrange-table drop seed 9: after the left arm lifts the fork, the right arm's top-down grasp on the spoon
-    closed at once (1 m/s pads) pops the spoon onto its side; brought closed over 0.2 s it stays flat."""
+@pytest.mark.parametrize("close_s", [0.0, 0.2])
+def test_a_top_down_grasp_keeps_a_spoon_flat(close_s: float) -> None:
+    """rearrange-table drop seed 9: after the left arm lifts the fork, the right arm's top-down grasp holds the spoon
+    flat, closed at once (1 m/s pads) or over 0.2 s. With the old 1 mm contact impedance width the sudden close
+    popped it onto its side (a contact that returned more energy than it took; see sim.contact_width_m)."""
     from kintsugi.tasks.tabletop.rearrange_table import SPEC
     from kintsugi.tasks.tabletop.robot import TabletopRobot
     from kintsugi.tasks.tabletop.task import TabletopTask
@@ -32,7 +33,7 @@ def test_a_gentle_close_keeps_a_spoon_flat(close_s: float, rolls: bool) -> None:
                      {"action": "grasp", "arm": "right", "obj": "spoon", "pre_grasp_offset": 0.06,
                       "yaw_deg": -104.128, "close_s": close_s}):
             assert robot.execute(call).reached
-        assert (_roll_deg(world, "spoon") > 30.0) == rolls
+        assert _roll_deg(world, "spoon") < 30.0
         assert "spoon" in robot.grip_sense("right").touching
     finally:
         world.close()

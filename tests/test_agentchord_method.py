@@ -89,12 +89,24 @@ def test_backtracking_baselines_go_back_to_a_subgoal_that_holds(method: str, cal
     assert m.recoveries == 1 and not any(s.recovery for s in r.skills)  # re-runs nominal edges, no branch
 
 
-def test_an_object_that_left_the_cameras_view_ends_the_trial_with_the_reason() -> None:
-    """handover-block seed 1: the dropped block bounces off the table. The re-grasp cannot be planned (nothing
-    moves); running it again in the same still scene would only be refused again, so the trial ends at once,
-    recorded with the planner's reason, instead of spending its recoveries on grasps that never start."""
-    r = run_trial(TrialSpec(task="handover-block", method="agentchord", variant="default", condition="drop", seed=1,
-                            overrides={"disturbance.drop_p": 0.1}))
+def test_an_object_that_left_the_cameras_view_ends_the_trial_with_the_reason(monkeypatch: pytest.MonkeyPatch) -> None:
+    """pour-single seed 22 drops the bottle during the lift; here the drop also throws it off the table (the test
+    moves it 2 m away). The re-grasp cannot be planned (nothing moves); running it again in the same still scene
+    would only be refused again, so the trial ends at once, recorded with the planner's reason, instead of
+    spending its recoveries on grasps that never start."""
+    from kintsugi.tasks.tabletop.conditions import DropDisturbance
+
+    drop = DropDisturbance.__call__
+
+    def drop_and_throw(self: DropDisturbance, world) -> None:  # noqa: ANN001
+        before = len(self.events)
+        drop(self, world)
+        if len(self.events) > before:
+            a = world._obj_qpos["bottle"]
+            world.data.qpos[a:a + 3] = (0.3, -2.0, 0.1)
+
+    monkeypatch.setattr(DropDisturbance, "__call__", drop_and_throw)
+    r = _trial("drop", 22, **{"disturbance.drop_p": 0.1})
     assert not r.success and r.error is not None
     assert "grasp cannot be carried out" in r.error and "not visible" in r.error
     assert metrics_of(r).recoveries == 1

@@ -105,7 +105,7 @@ def build_scene_xml(cfg: TabletopConfig, objects: Sequence[str], targets: Sequen
     <map znear="0.05" zfar="5"/>
   </visual>
   <default>
-    <geom solref="{solref}" solimp="0.95 0.99 0.001" condim="3" contype="1" conaffinity="1"/>
+    <geom solref="{solref}" solimp="0.95 0.99 {s.contact_width_m:.6g}" condim="3" contype="1" conaffinity="1"/>
     <default class="link"><geom contype="2" conaffinity="1" rgba="{'0.82 0.83 0.86 1'}"/></default>
     <default class="visual"><geom contype="0" conaffinity="0" density="0" rgba="0.2 0.2 0.22 1"/></default>
     <default class="pad">
