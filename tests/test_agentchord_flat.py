@@ -66,3 +66,18 @@ def test_flat_is_checked_on_the_goal_from_the_objects_thickness() -> None:
     assert flat.evaluate(Features(objects={"spoon": _Seen(0.012)})) < 0.0  # lying flat
     assert flat.evaluate(Features(objects={"spoon": _Seen(0.013 + FLAT_MARGIN_M - 0.001)})) < 0.0
     assert flat.evaluate(Features(objects={"spoon": _Seen(0.041)})) > 0.0  # rolled onto its side
+
+
+def test_a_spoon_that_fell_into_its_place_is_not_placed_again() -> None:
+    """rearrange-table seed 2: the spoon slips out during its place, 8 cm up, and lands flat in its region with its
+    head away. The drop branch reads that at rest and releases into the place's target: no re-grasp."""
+    from kintsugi.methods.agentchord.method import metrics_of
+    from kintsugi.trial import TrialSpec, run_trial
+
+    r = run_trial(TrialSpec(task="rearrange-table", method="agentchord", variant="default", condition="drop", seed=2,
+                            overrides={"disturbance.drop_p": 0.1}))
+    assert r.success and r.framework_success
+    assert [to for _, to in r.transitions] == ["re.e10_place_at.drop.right.0"]
+    recovery = [s.skill for s in r.skills if s.recovery]
+    assert recovery and set(recovery) == {"open_gripper"}  # the hub's settle and the release, nothing re-placed
+    assert metrics_of(r).episode_steps < 1600  # 1980 when it placed the spoon again

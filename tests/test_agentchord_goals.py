@@ -135,9 +135,36 @@ def test_two_arm_carry_is_watched_for_a_drop_and_recovers_by_taking_it_again_wit
     assert not any(p["monitor"]["failure_mode"] in ("slip", "missed_grasp") and p["edge"] in ("e4_take_both",
                                                                                              "e5_carry_both")
                    for p in props)  # held by thin rims, far from the centroid
-    first = drops[0]["edges"][0]
-    assert first["actions"][0]["name"] == "drive" and first["actions"][0]["args"]["left"]["action"] == "grasp"
-    assert drops[0]["edges"][-1]["target"] == "s5_carry_both"
+    edges = drops[0]["edges"]
+    assert edges[0]["actions"] == [{"name": "open_gripper", "args": {"arm": "left"}}]  # the hub: let it come to rest
+    fell = [e for e in edges if ".fell." in e["id"]]
+    assert fell[0]["actions"][0]["name"] == "drive" and fell[0]["actions"][0]["args"]["left"]["action"] == "grasp"
+    assert fell[-1]["target"] == "s5_carry_both" and not fell[0]["guard"]
+    # Or it landed in its region: released into a later node, guarded by that node's facts about the tray.
+    (landed,) = [e for e in edges if ".landed." in e["id"]]
+    assert landed["actions"] == [{"name": "open_gripper", "args": {"arm": "left"}}]
+    assert landed["target"] not in ("s4_take_both", "s5_carry_both") and landed["target"].startswith("s")
+    assert {"in_region"} <= {c["kind"] for c in landed["guard"]}
     # The two-arm hold node checks the pads, not the centroid's distance from each hand.
-    taken = next(n for p in drops for n in p["nodes"])
+    taken = next(n for p in drops for n in p["nodes"] if n.get("constraints"))
     assert {c["kind"] for c in taken["constraints"]} == {"touching"}
+
+
+@pytest.mark.parametrize("forbid", [False, True])
+def test_a_fall_into_place_is_a_branch_only_when_the_goal_allows_a_drop(forbid: bool) -> None:
+    """A drop while carrying or placing the block may land it in its region: with a guard made of the place's
+    own facts about it, the branch releases into the place's target. `not dropped(block)` (the instruction asks
+    for it to be set down) leaves that branch out: a fall is never a place."""
+    block = _box("block", (0.40, 0.20), (0.05, 0.05, 0.05))
+    goal = ["in_region(block, target)", "flat(block)", "released(block)"] + (["not dropped(block)"] if forbid else [])
+    regions = {"target": (0.40, -0.25)}
+    reply = _compose("Place the block in the target region.", goal, [block], regions)
+    req = ArrangerRequest(task="place", graph=reply.graph, node_facts=reply.node_facts, goal=goal,
+                          edge_operators=reply.edge_operators, objects=[block], arms=ARMS, domain=TABLETOP_DOMAIN,
+                          regions=regions)
+    drops = [p for p in embedded_arrange(req).proposals if p["monitor"]["failure_mode"] == "drop"]
+    landed = [e for p in drops for e in p["edges"] if ".landed." in e["id"]]
+    assert drops and bool(landed) is not forbid
+    for e in landed:
+        assert {c["kind"] for c in e["guard"]} >= {"in_region", "above"}  # in the region, lying flat
+        assert [a["name"] for a in e["actions"]] == ["open_gripper"]

@@ -82,6 +82,37 @@ def outcomes(mode: FailureMode, s: State, arm: str, obj: str) -> list[tuple[str,
             ("lying", lying, [{"kind": "tilted", "object": obj, "min_deg": LANDED_DEG}])]
 
 
+LOCATIONS = ("in_region", "inside")
+"""Facts that say where an object is to end up: a carry or place is taking it there."""
+
+
+def landed(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: FailureMode, arm: str, obj: str, u: State,
+           facts: dict[str, State], seen: dict[str, SeenObject], where: Any) -> tuple[str, State, list[dict]] | None:
+    """The outcome where a dropped object landed where it was being taken (a fall in a place's last centimetres,
+    or at the end of a carry over its region): the facts about it of the first later node that puts it
+    somewhere, with their constraints as the guard, read at rest. None when the edge takes the object nowhere
+    new, or the goal forbids a drop (`not dropped(obj)`: the instruction asks for it to be set down). A guard
+    it cannot decide (NaN: an axis-less cube's uprightness) does not hold, so the re-grasp stays the fallback."""
+    import networkx as nx
+
+    if mode.after is not _drop:
+        return None
+    try:
+        if ("dropped", obj) in parse_literals(request.goal, request.domain, where="goal")[1]:
+            return None
+    except PlanningError:  # a goal it cannot read might forbid the drop
+        return None
+    nominal = nx.DiGraph((e.source, e.target) for e in graph.edges if e.kind == "nominal")
+    hops = nx.single_source_shortest_path_length(nominal, edge.target)
+    for w in sorted(hops, key=hops.__getitem__):
+        if not {a for a in facts[w] if a[0] in LOCATIONS and a[1] == obj} - u:
+            continue
+        about = sorted(a for a in facts[w] if obj in a[1:] and a[0] not in ("holding", "lifted", "over", "tilted"))
+        guard, _ = node_constraints(request.domain, about, seen, where)
+        return ("landed", mode.after(u, arm, obj) | frozenset(about), guard) if guard else None
+    return None
+
+
 def _unchanged(s: State, arm: str, obj: str) -> State:
     return s
 
@@ -222,6 +253,8 @@ def _branch(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: Failure
     if releases and check.get("kind") == "touching":  # a closed-on-nothing check reads an open hand as fine
         check = {**check, "while_closed": True}
     outs = outcomes(mode, u, arm, obj)
+    done = landed(request, graph, edge, mode, arm, obj, u, facts, seen, where)
+    outs = outs if done is None else [done, *outs]
     if len(outs) == 1:
         nodes, edges = _chain(request, graph, edge, mode, arm, tag, edge.source, outs[0][1], [], facts, ops, ctg,
                               seen, where)
@@ -236,7 +269,7 @@ def _branch(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: Failure
         misses = []
         for label, state, guard in outs:
             try:
-                n, e = _chain(request, graph, edge, mode, arm, f"{tag}.{label}", hub, state, guard, facts, ops, ctg,
+                n, e = _chain(request, graph, edge, mode, arm, f"{tag}.{label or 'fell'}", hub, state, guard, facts, ops, ctg,
                               seen, where)
             except PlanningError as exc:
                 misses.append(f"{label}: {exc}")

@@ -175,6 +175,8 @@ class ArrangerRequest(StrictModel):
     domain: Domain
     regions: dict[str, tuple[float, float]] = Field(default_factory=dict, max_length=16)
     """As in ComposerRequest: the task statement's named fixed regions."""
+    goal: list[Literal_] = Field(default_factory=list, max_length=32)
+    """As in ComposerRequest: what a recovery may count as reached (`not dropped(x)`: a fall is never a place)."""
     failure_modes: list[str] = Field(default_factory=lambda: list(FAILURE_MODES))
     images_png: dict[str, bytes] = Field(default_factory=dict, repr=False)
 

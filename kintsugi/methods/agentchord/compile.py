@@ -77,7 +77,7 @@ def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = T
                         {"composer": t1 - t0, "arranger": 0.0})
     arrange = ArrangerRequest(task=spec.instruction, graph=composed.graph, node_facts=composed.node_facts,
                               edge_operators=composed.edge_operators, objects=objects, arms=arms,
-                              regions=task_regions(spec, cfg),
+                              regions=task_regions(spec, cfg), goal=request.goal,
                               domain=TABLETOP_DOMAIN, images_png=dict(observation.images_png))
     result, arranged = ask_arrange(reasoner, arrange, nominal, vocab)
     t2 = time.perf_counter()
