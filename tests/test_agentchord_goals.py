@@ -145,6 +145,10 @@ def test_two_arm_carry_is_watched_for_a_drop_and_recovers_by_taking_it_again_wit
     assert landed["actions"] == [{"name": "open_gripper", "args": {"arm": "left"}}]
     assert landed["target"] not in ("s4_take_both", "s5_carry_both") and landed["target"].startswith("s")
     assert {"in_region"} <= {c["kind"] for c in landed["guard"]}
+    # The capsule is going `inside` the tray, which no constraint checks: a guard without it would pass with the
+    # capsule lying anywhere (its other facts hold where it started), so it gets no such outcome.
+    capsule_drops = [p for p in props if p["monitor"]["check"].get("object") == "capsule"]
+    assert capsule_drops and not any(".landed." in e["id"] for p in capsule_drops for e in p["edges"])
     # The two-arm hold node checks the pads, not the centroid's distance from each hand.
     taken = next(n for p in drops for n in p["nodes"] if n.get("constraints"))
     assert {c["kind"] for c in taken["constraints"]} == {"touching"}

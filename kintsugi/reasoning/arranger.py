@@ -105,11 +105,14 @@ def landed(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: FailureM
     nominal = nx.DiGraph((e.source, e.target) for e in graph.edges if e.kind == "nominal")
     hops = nx.single_source_shortest_path_length(nominal, edge.target)
     for w in sorted(hops, key=hops.__getitem__):
-        if not {a for a in facts[w] if a[0] in LOCATIONS and a[1] == obj} - u:
+        going = sorted({a for a in facts[w] if a[0] in LOCATIONS and a[1] == obj} - u)
+        if not going:
             continue
+        if not all(node_constraints(request.domain, [a], seen, where)[0] for a in going):
+            return None  # where it is going has no check (`inside`): a guard without it would pass anywhere
         about = sorted(a for a in facts[w] if obj in a[1:] and a[0] not in ("holding", "lifted", "over", "tilted"))
         guard, _ = node_constraints(request.domain, about, seen, where)
-        return ("landed", mode.after(u, arm, obj) | frozenset(about), guard) if guard else None
+        return "landed", mode.after(u, arm, obj) | frozenset(about), guard
     return None
 
 
