@@ -95,7 +95,11 @@ PREDICATES = [
        [{"kind": "heading", "object": "?1", "yaw_deg": "$yaw(?2)", "tol_deg": HEADING_TOL_DEG}]),
     _p("handed_over", ["object", "arm", "arm"], "the first arm held the object, then the second took it (history)"),
     _p("dropped", ["object"], "the object fell from a gripper (history; no action makes it)"),
-    _p("inside", ["object", "object"], "the first object stands inside the second (a container)"),
+    _p("inside", ["object", "object"], "the first object stands inside the second (a container): its centre within "
+       "the container's half width of the container's centre, its bottom below the container's rim",
+       [{"kind": "misaligned", "a": {"entity": "?1"}, "b": {"entity": "?2"}, "tol": "$hy(?2, 0)"},
+        {"kind": "above", "a": {"entity": "?2", "feature": "top"}, "b": {"entity": "?1", "feature": "bottom"},
+         "min_gap": 0.0}]),
     _p("moved", ["object"], "the object was carried away from where it was first seen"),
 ]
 
