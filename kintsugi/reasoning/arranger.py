@@ -102,8 +102,7 @@ def landed(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: FailureM
             return None
     except PlanningError:  # a goal it cannot read might forbid the drop
         return None
-    nominal = nx.DiGraph((e.source, e.target) for e in graph.edges if e.kind == "nominal")
-    hops = nx.single_source_shortest_path_length(nominal, edge.target)
+    hops = nx.single_source_shortest_path_length(_nominal(graph), edge.target)
     for w in sorted(hops, key=hops.__getitem__):
         going = sorted({a for a in facts[w] if a[0] in LOCATIONS and a[1] == obj} - u)
         if not going:
@@ -204,6 +203,19 @@ def _placed_by(edge: Any, arm: str) -> bool:
     return any(a.name == "place" and a.args.get("arm") == arm for a in edge.actions)
 
 
+_NOMINAL: dict[int, Any] = {}
+"""The nominal edges as a networkx DiGraph, per graph within one `embedded_arrange` call (cleared at its
+start): every branch's merge search and `landed` walk them."""
+
+
+def _nominal(graph: TaskGraph) -> Any:
+    import networkx as nx
+
+    if id(graph) not in _NOMINAL:
+        _NOMINAL[id(graph)] = nx.DiGraph((e.source, e.target) for e in graph.edges if e.kind == "nominal")
+    return _NOMINAL[id(graph)]
+
+
 _MERGES: dict[tuple, tuple[str, list] | str] = {}
 """`_merge`'s answers within one `embedded_arrange` call (cleared at its start): a drop and a slip on the same
 edge leave the same state, so half the searches were repeats."""
@@ -231,9 +243,8 @@ def _search_merge(start: State, edge: Any, graph: TaskGraph, facts: dict[str, St
                   ctg: dict[str, float]) -> tuple[str, list]:
     import networkx as nx
 
-    nominal = nx.DiGraph((e.source, e.target) for e in graph.edges if e.kind == "nominal")
     best = None
-    later = [edge.target, *nx.descendants(nominal, edge.target)]
+    later = [edge.target, *nx.descendants(_nominal(graph), edge.target)]
     for w, steps in zip(later, plan_each(start, [(facts[w], frozenset()) for w in later], ops)):
         if steps is None:
             continue
@@ -272,8 +283,8 @@ def _branch(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: Failure
         misses = []
         for label, state, guard in outs:
             try:
-                n, e = _chain(request, graph, edge, mode, arm, f"{tag}.{label or 'fell'}", hub, state, guard, facts, ops, ctg,
-                              seen, where)
+                n, e = _chain(request, graph, edge, mode, arm, f"{tag}.{label or 'fell'}", hub, state, guard, facts,
+                              ops, ctg, seen, where)
             except PlanningError as exc:
                 misses.append(f"{label}: {exc}")
                 continue
@@ -323,6 +334,7 @@ def _short(exc: Exception, limit: int = 800) -> str:
 def embedded_arrange(request: ArrangerRequest) -> ArrangerReply:
     """Monitors and recovery branches for every nominal edge, from the knowledge base and the planner."""
     _MERGES.clear()
+    _NOMINAL.clear()
     try:
         graph = TaskGraph.from_data(request.graph)
     except GraphError as exc:
