@@ -308,6 +308,22 @@ def test_one_pass_equals_per_object_and_is_bounded(scene: Scene) -> None:
     assert np.array_equal(object_cloud(geoms_only, scene.ids["bottle"]), scene.clouds["bottle"])
 
 
+def test_a_flying_pixel_is_left_out_and_every_real_pixel_kept(scene: Scene) -> None:
+    """A lone silhouette pixel whose depth belongs to nothing near it (seen on a lying spoon: 12 cm above it)."""
+    cam, depth, seg = scene.views[0]
+    bottle = scene.ids["bottle"]
+    assert len(object_cloud([(cam, depth, seg)], bottle, max_points=10**6, flying_tol_m=None)) == len(
+        object_cloud([(cam, depth, seg)], bottle, max_points=10**6))  # a clean render has none
+    rows, cols = np.nonzero(np.isin(np.where(seg[..., 1] == 5, seg[..., 0], -1), list(bottle)))
+    planted = depth.copy()
+    for k in (int(np.argmin(cols)), len(rows) // 2):  # on its silhouette (its wall seen edge-on), on its top
+        planted[rows[k], cols[k]] = depth[rows[k] - 1:rows[k] + 2, cols[k] - 1:cols[k] + 2].min() - 0.12
+    kept = object_cloud([(cam, planted, seg)], bottle, max_points=10**6)
+    raw = object_cloud([(cam, planted, seg)], bottle, max_points=10**6, flying_tol_m=None)
+    assert len(kept) == len(raw) - 2
+    assert kept[:, 2].max() < raw[:, 2].max() - 0.05
+
+
 def test_bad_inputs_name_the_problem(scene: Scene) -> None:
     cam, depth, seg = scene.views[0]
     with pytest.raises(ConfigError, match="depth image has shape"):

@@ -29,7 +29,8 @@ _FN = re.compile(r"^\$(x|y|z|hy|nhy|rx|ry|yaw|mirror|thin)\(\s*(\?[A-Za-z0-9_]+)
 _FN2 = re.compile(r"^\$(dx|dy|turn)\(\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*,\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*\)$")
 FLAT_RATIO = 1.1
 """An object no taller than this times its middle extent lies flat (a fork, a tray, a cube; not a standing bottle)."""
-HEADING_TOL_DEG = 20.0
+HEADING_TOL_DEG = 10.0
+"""Used only when the domain's `heading` predicate states no tolerance of its own."""
 
 
 class GoalHolds(PlanningError):
@@ -66,15 +67,25 @@ def observed_facts(request: Any, domain: Domain, places: list[str] = ()) -> Stat
         if "flat" in known and looks_flat(o):
             facts.add(("flat", o.name))
         if "heading" in known:
-            yaw = head_yaw_deg(o)
+            yaw, tol = head_yaw_deg(o), heading_tol_deg(domain)
             facts |= {("heading", o.name, d) for d, psi in domain.directions.items()
-                      if yaw is not None and abs(wrap_deg(yaw - psi)) <= HEADING_TOL_DEG}
+                      if yaw is not None and abs(wrap_deg(yaw - psi)) <= tol}
     for p in places:
         if "direction" in known and p in domain.directions:
             facts.add(("direction", p))
         elif "region" in known:
             facts.add(("region", p))
     return frozenset(facts)
+
+
+def heading_tol_deg(domain: Domain) -> float:
+    """The tolerance the domain's own `heading` check uses: the first observation must read the fact exactly as
+    the sub-goal node will check it, or a plan skips a turn its node then refuses."""
+    for p in domain.predicates:
+        for c in p.constraints if p.name == "heading" else ():
+            if c.get("kind") == "heading" and isinstance(c.get("tol_deg"), (int, float)):
+                return float(c["tol_deg"])
+    return HEADING_TOL_DEG
 
 
 def remembered_facts(request: Any, domain: Domain) -> State:
