@@ -106,6 +106,10 @@ def _tilt_deg(axis, gravity: Vec3) -> float:
     return math.degrees(math.acos(min(1.0, abs(ax * gx + ay * gy + az * gz) / n)))
 
 
+def _dot(a, b) -> float:
+    return float(a[0]) * float(b[0]) + float(a[1]) * float(b[1]) + float(a[2]) * float(b[2])
+
+
 class _Template(GraphModel):
     """Common interface; subclasses set `kind` and implement `evaluate` and `refs`."""
 
@@ -156,7 +160,9 @@ class Drift(_Template):
 
 
 class Upright(_Template):
-    """Eq. 15, uprightness: angle(principal axis, gravity) - tol (degrees; the axis has no sign)."""
+    """Eq. 15, uprightness: angle(principal axis, gravity) - tol (degrees). The axis has no sign, unless the
+    object shows its top (extreme `cap`, a bottle's painted cap): one whose cap is below its centre stands
+    on its head and reads 180 - angle."""
 
     kind: Literal["upright"] = "upright"
     object: Name
@@ -165,7 +171,13 @@ class Upright(_Template):
 
     def evaluate(self, f: Features) -> float:
         obj = f.objects.get(self.object)
-        return NAN if obj is None else _tilt_deg(obj.axis, self.gravity) - self.tol_deg
+        if obj is None:
+            return NAN
+        tilt = _tilt_deg(obj.axis, self.gravity)
+        cap, centre = vector_feature(obj, "cap"), vector_feature(obj, "centroid")
+        if cap is not None and centre is not None and _dot(cap, self.gravity) > _dot(centre, self.gravity):
+            tilt = 180.0 - tilt
+        return tilt - self.tol_deg
 
     def refs(self):
         yield (self.object, "object", "axis")

@@ -1,8 +1,8 @@
 """Which end of each object is its top, kept by the conductor from what the robot senses.
 
-Perception gives an object's principal axis without a sign, and a bottle looks the same from both ends, so
-after it falls over nothing in one image says which end is its mouth. The robot can still know: an object
-first seen standing has its top up; while a hand holds it, its top turns with the hand (joint encoders);
+Perception gives an object's principal axis without a sign. A bottle's painted cap, when the cameras see it
+(perception's extreme `cap`), says which end is its top outright. When a hand hides it, the robot can still
+know: an object first seen standing has its top up; while a hand holds it, its top turns with the hand (joint encoders);
 when it leaves the hand, its top is where the hand last had it; and while it falls and rolls, each perceived
 axis is signed to agree with the previous estimate (the settle reads come every ~0.1 s, well under the time
 a falling object needs to turn by 90 degrees). Standing a fallen object up uses this to turn its top up,
@@ -19,6 +19,8 @@ from scipy.spatial.transform import Rotation
 from kintsugi.taskgraph.constraints import head_yaw_deg
 
 UP = np.array([0.0, 0.0, 1.0])
+CAP_ALONG_M = 0.02
+"""A seen cap this far along the axis from the centre signs it (nearer, the cap's pixels tell no end)."""
 
 
 def hand_rotation(arm_state: Any) -> np.ndarray:
@@ -38,12 +40,19 @@ class Tops:
         self.in_hand: dict[tuple[str, str], np.ndarray] = {}
 
     def observe(self, objects: Mapping[str, Any]) -> None:
-        """Sign each perceived axis like the current estimate; an object first seen standing has its top up."""
+        """Sign each perceived axis toward the seen cap, else like the current estimate; an object first seen
+        standing has its top up."""
         for name, f in objects.items():
             if not getattr(f, "visible", False) or f.axis is None or f.upright is None:
                 continue
             a = np.asarray(f.axis, dtype=float)
             a = a / max(float(np.linalg.norm(a)), 1e-12)
+            cap = (getattr(f, "extremes", None) or {}).get("cap")
+            if cap is not None and f.centroid is not None:
+                along = float((np.asarray(cap, dtype=float) - np.asarray(f.centroid, dtype=float)) @ a)
+                if abs(along) >= CAP_ALONG_M:
+                    self.world[name] = a if along > 0.0 else -a
+                    continue
             ref = self.world.get(name)
             if ref is None:
                 if f.upright:

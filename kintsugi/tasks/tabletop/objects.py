@@ -19,6 +19,10 @@ from kintsugi.tasks.tabletop.config import ObjectSection, ObjectsSection
 CUP_SEGMENTS = 12
 CAPSULE_SLICES = 3
 TRAY_WALL = 0.006
+CAP_HALF_M = 0.01
+"""A bottle's cap: a painted band this half-tall over its top end, so a camera can tell its top from its
+bottom (a plain cylinder looks the same either way up, and a stand-up could set it down upside down)."""
+CAP_RGBA = (0.9, 0.9, 0.9, 1.0)
 
 
 @dataclass(frozen=True)
@@ -35,6 +39,8 @@ class Shape:
     perception then reports raw cloud features instead of a misfitted box."""
     wall: float | None = None
     """Open containers (cup, tray): wall and floor thickness; perception fits the solid minus its cavity."""
+    cap: bool = False
+    """A painted cap marks its top end (body +z): geom `<kind>_cap`, no mass, no contacts."""
 
     def primitive(self) -> Primitive:
         """The shape as the perception catalogue states it (what a fit may assume)."""
@@ -54,7 +60,7 @@ def shape_of(kind: str, objects: ObjectsSection) -> Shape:
     s = getattr(objects, kind).size_m
     if kind in ("bottle", "cup"):
         return Shape("cylinder", radius=s[0], half_height=s[1], grasp="side_if_upright",
-                     wall=s[2] if kind == "cup" else None)
+                     wall=s[2] if kind == "cup" else None, cap=kind == "bottle")
     if kind in ("plate", "capsule"):
         return Shape("cylinder", radius=s[0], half_height=s[1])
     if kind in ("fork", "spoon"):
@@ -82,8 +88,13 @@ def _geoms(kind: str, o: ObjectSection) -> list[str]:
         return [f'<geom name="capsule_body{i}" type="cylinder" size="{f(s[0], hs)}" '
                 f'pos="0 0 {-s[1] + (2 * i + 1) * hs:.6g}" mass="{m / CAPSULE_SLICES:.6g}" {common}/>'
                 for i in range(CAPSULE_SLICES)]
-    if kind in ("bottle", "plate"):
-        return [f'<geom name="{kind}_body" type="cylinder" size="{f(s[0], s[1])}" mass="{m:.6g}" {common}/>']
+    if kind == "bottle":  # the cap stands 0.5 mm proud of the body, so the cameras see it and not the body there
+        return [f'<geom name="bottle_body" type="cylinder" size="{f(s[0], s[1])}" mass="{m:.6g}" {common}/>',
+                f'<geom name="bottle_cap" type="cylinder" size="{f(s[0] + 0.0005, CAP_HALF_M)}" '
+                f'pos="0 0 {s[1] + 0.0005 - CAP_HALF_M:.6g}" mass="0" contype="0" conaffinity="0" '
+                f'rgba="{f(*CAP_RGBA)}"/>']
+    if kind == "plate":
+        return [f'<geom name="plate_body" type="cylinder" size="{f(s[0], s[1])}" mass="{m:.6g}" {common}/>']
     if kind == "cup":
         r, hh, wall = s
         floor = wall / 2  # half thickness: the floor is as thick as the wall

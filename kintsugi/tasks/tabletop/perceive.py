@@ -19,12 +19,16 @@ import numpy as np
 from kintsugi.perception.features import ObjectFeatures, features, object_clouds, render_view, sign_normalized
 from kintsugi.perception.primitives import Fit
 from kintsugi.tasks.tabletop.cloth import CLOUD_POINTS, cloud_corners, corner_features, truth_corner_features
-from kintsugi.tasks.tabletop.objects import Shape
+from kintsugi.tasks.tabletop.objects import CAP_HALF_M, Shape
 from kintsugi.tasks.tabletop.scene import CAMERAS
 from kintsugi.tasks.tabletop.world import GroundTruth, TabletopWorld
 
 UP = np.array([0.0, 0.0, 1.0])
 UPRIGHT_TOL_DEG = 15.0
+MIN_CAP_POINTS = 10
+"""Fewer cap pixels than this (hidden behind a hand) tell nothing about which end is the top."""
+CAP_BELOW_M = 0.02
+"""A cap this far below the object's centre: it stands on its head (a lying bottle's cap is level with it)."""
 
 
 class ObjectPerception:
@@ -32,6 +36,9 @@ class ObjectPerception:
         self._world = world
         self.mode = world.cfg.perception.objects
         self._geoms = {k: {int(g) for g in np.flatnonzero(world.geom_object == i)} for i, k in enumerate(world.objects)}
+        self._caps = {k: {mujoco.mj_name2id(world.model, mujoco.mjtObj.mjOBJ_GEOM, f"{k}_cap")}
+                      for k in world.objects if world.shapes[k].cap}
+        """The painted cap of an object that has one: its pixels say which end is the top."""
         self._shapes = world.shapes
         cams = world.cfg.cameras
         self._pixel_m = 2 * cams.top_height_m * math.tan(math.radians(cams.top_fovy_deg) / 2) / cams.height
@@ -51,6 +58,8 @@ class ObjectPerception:
         views = [render_view(w.seg_depth_renderer, w.data, cam) for cam in CAMERAS]
         clouds = object_clouds(views, {k: self._geoms[k] for k in wanted})
         out = {k: features(k, clouds[k], self._shapes[k].primitive(), views=views) for k in wanted}
+        caps = object_clouds(views, {k: self._caps[k] for k in wanted if k in self._caps})
+        out |= {k: with_cap(out[k], cap.mean(axis=0)) for k, cap in caps.items() if len(cap) >= MIN_CAP_POINTS}
         if cloths:  # a cloth: its flex pixels (objtype FLEX), corners from the cloud's footprint
             flex_clouds = object_clouds(views, {k: {i} for i, k in cloths.items()}, objtype=int(mujoco.mjtObj.mjOBJ_FLEX),
                                         max_points=CLOUD_POINTS)
@@ -85,7 +94,17 @@ def truth_features(truth: GroundTruth, shapes: dict[str, Shape]) -> dict[str, Ob
             extremes={"top": _v(fit.support(UP)), "bottom": _v(fit.support(-UP)),
                       "axis_pos": _v(centre + h * axis), "axis_neg": _v(centre - h * axis)},
         )
+        if s.cap:
+            out[name] = with_cap(out[name], centre + (s.half_height - CAP_HALF_M) * frame[:, 2])
     return out
+
+
+def with_cap(f: ObjectFeatures, cap: np.ndarray) -> ObjectFeatures:
+    """The features with the seen cap (extreme `cap`, the centre of its pixels): an object whose cap hangs
+    below its centre stands on its head, so it is not upright however vertical its axis."""
+    below = f.centroid is not None and float(cap[2]) < f.centroid[2] - CAP_BELOW_M
+    return f.model_copy(update={"extremes": {**f.extremes, "cap": _v(cap)},
+                                "upright": False if below and f.upright else f.upright})
 
 
 def _spans(s: Shape) -> tuple[float, float, float]:
