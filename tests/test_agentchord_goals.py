@@ -149,7 +149,7 @@ def test_two_arm_carry_is_watched_for_a_drop_and_recovers_by_taking_it_again_wit
     # only its other facts, which hold where it started too.
     capsule_drops = [p for p in props if p["monitor"]["check"].get("object") == "capsule"]
     guards = [e["guard"] for p in capsule_drops for e in p["edges"] if ".landed." in e["id"]]
-    assert guards and all({"misaligned", "above"} <= {c["kind"] for c in g if "tray" in str(c)} for g in guards)
+    assert guards and all({"within", "above"} <= {c["kind"] for c in g if "tray" in str(c)} for g in guards)
     # The two-arm hold node checks the pads, not the centroid's distance from each hand.
     taken = next(n for p in drops for n in p["nodes"] if n.get("constraints"))
     assert {c["kind"] for c in taken["constraints"]} == {"touching"}

@@ -88,3 +88,27 @@ def test_an_object_the_cameras_lost_is_no_obstacle(planner: Planner) -> None:
     plain = planner._grasp(A.Grasp(arm="right", obj="bottle"), view, {"bottle": BOTTLE})
     steps = planner._grasp(A.Grasp(arm="right", obj="bottle"), view, {"bottle": BOTTLE, "cup": lost})
     assert _labels(steps) == _labels(plain)
+
+
+def _lying(name: str, x: float, y: float, radius: float = 0.03, half: float = 0.1) -> ObjectFeatures:
+    c = (x, y, radius)
+    return ObjectFeatures(name=name, visible=True, n_points=500, fit="primitive", centroid=c, axis=(1.0, 0.0, 0.0),
+                          extent=(2 * half, 2 * radius, 2 * radius), tilt_deg=90.0, upright=False,
+                          extremes={"top": (x, y, 2 * radius), "bottom": (x, y, 0.0), "axis_pos": (x + half, y, radius),
+                                    "axis_neg": (x - half, y, radius)})
+
+
+def test_at_the_edge_of_reach_the_grasp_skips_the_pose_above_and_comes_to_the_pre_grasp_pose(planner: Planner) -> None:
+    """A fallen bottle out at the edge of reach (pour-dual seed 25: 0.63 m out): pointing down, the hand reaches
+    the pre-grasp pose 6 cm over it but not the pose above its top; the grasp comes in from there."""
+    home = planner.iks["right"].home
+    pos, rot = planner.iks["right"].fk(home)
+    view = ArmView(q=home.copy(), pos=pos, rot=rot, base=BASE, touching={})
+    near = planner._grasp(A.Grasp(arm="right", obj="bottle", pre_grasp_offset=0.06), view,
+                          {"bottle": _lying("bottle", 0.45, -0.2)})
+    assert _labels(near)[1:] == ["above bottle top-down (fallen)", "pre-grasp bottle", "approach bottle", "close"]
+    far = _lying("bottle", 0.627, -0.007)
+    steps = planner._grasp(A.Grasp(arm="right", obj="bottle", pre_grasp_offset=0.06), view, {"bottle": far})
+    assert "pre-grasp bottle" not in _labels(steps) and _labels(steps)[-2:] == ["approach bottle", "close"]
+    first = next(s for s in steps if isinstance(s, Move))
+    assert first.tcp[0][2] == pytest.approx(far.centroid[2] + 0.06, abs=1e-6)  # the pre-grasp pose, not higher

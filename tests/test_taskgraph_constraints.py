@@ -29,6 +29,7 @@ class ForeignObject:
     top: np.ndarray
     upright: bool = True
     extremes: dict | None = None
+    extent: tuple | None = None
 
 
 def tilted(deg: float) -> tuple[float, float, float]:
@@ -36,6 +37,7 @@ def tilted(deg: float) -> tuple[float, float, float]:
     return (0.0, math.sin(r), math.cos(r))
 
 
+C30, S30 = math.cos(math.radians(30.0)), math.sin(math.radians(30.0))
 F = Features(
     objects={
         "cup": ObjectState(centroid=(0.10, 0.0, 0.05), axis=(0.0, 0.0, -1.0), n_points=400),
@@ -43,6 +45,14 @@ F = Features(
         # A spoon lying along y, its wide head (the axis end nearer the centroid) towards +y.
         "spoon": ForeignObject(np.array([0.4, 0.02, 0.01]), np.array([0.0, 1.0, 0.0]), 300, np.array([0.4, 0.02, 0.02]),
                                upright=False, extremes={"axis_pos": (0.4, 0.08, 0.01), "axis_neg": (0.4, -0.10, 0.01)}),
+        # A tray turned 30 deg, 22 x 16 cm; a capsule in its corner, one beyond its end; a round bin standing.
+        "tray": ForeignObject(np.array([0.5, 0.0, 0.01]), np.array([C30, S30, 0.0]), 900, np.array([0.5, 0.0, 0.02]),
+                              upright=False, extent=(0.22, 0.16, 0.02)),
+        "corner": ObjectState(centroid=(0.5 + 0.09 * C30 - 0.06 * S30, 0.09 * S30 + 0.06 * C30, 0.02)),
+        "beyond": ObjectState(centroid=(0.5 - 0.13 * C30, -0.13 * S30, 0.02)),
+        "bin": ForeignObject(np.array([0.0, 0.3, 0.05]), np.array([0.0, 0.0, 1.0]), 900, np.array([0.0, 0.3, 0.1]),
+                             extent=(0.1, 0.08, 0.08)),
+        "in_bin": ObjectState(centroid=(0.03, 0.33, 0.02)),
     },
     arms={"right": ArmState(eef=(0.0, 0.0, 0.30), opening=0.004, closed=True, touching=frozenset({"bottle"}))},
 )
@@ -80,6 +90,12 @@ GOLDEN = [
     ({"kind": "heading", "object": "spoon", "yaw_deg": 90.0, "tol_deg": 20.0}, -20.0),
     ({"kind": "heading", "object": "spoon", "yaw_deg": -90.0, "tol_deg": 20.0}, 160.0),
     ({"kind": "heading", "object": "spoon", "yaw_deg": 0.0, "tol_deg": 15.0}, 75.0),
+    # within: the excursion beyond the footprint's half length / half width in the container's own frame. The
+    # corner is inside (a circle of the tray's half width would leave it 2.8 cm out); margin moves the rim in.
+    ({"kind": "within", "point": {"entity": "corner"}, "container": "tray"}, -0.02),
+    ({"kind": "within", "point": {"entity": "corner"}, "container": "tray", "margin": 0.01}, -0.01),
+    ({"kind": "within", "point": {"entity": "beyond"}, "container": "tray"}, 0.02),
+    ({"kind": "within", "point": {"entity": "in_bin"}, "container": "bin"}, math.hypot(0.03, 0.03) - 0.04),
 ]
 
 
@@ -104,6 +120,7 @@ def test_every_template_has_a_golden_case():
     {"kind": "detached", "arm": "left", "object": "cup", "tol": 0.1},
     {"kind": "misaligned", "a": {"entity": "cup"}, "b": {"entity": "cup", "feature": "missing_attr"}, "tol": 0.1},
     {"kind": "drift", "point": {"entity": "cup"}, "tol": 0.1},  # ref not latched yet
+    {"kind": "within", "point": {"entity": "corner"}, "container": "cup"},  # no perceived extent
 ])
 def test_missing_inputs_read_nan(data):
     assert math.isnan(make(**data).evaluate(F))

@@ -16,7 +16,7 @@ Vec = Sequence[float]
 ARM_FEATURES = frozenset({"eef", "opening", "closed", "touching"})
 """What every arm reports; object features are whatever perception supplies (see Vocabulary)."""
 
-OBJECT_FEATURES = frozenset({"centroid", "axis", "n_points"})
+OBJECT_FEATURES = frozenset({"centroid", "axis", "n_points", "extent"})
 """The object features the built-in constraint templates read directly."""
 
 

@@ -33,6 +33,8 @@ INSIDE_AT_M = -0.03
 """Objects go into a container this far behind its centre (x), clear of rims an arm may later take."""
 INSIDE_FLOOR_M = 0.014
 """Placing into a shallow container: release this high above the table (its floor plus a clearance)."""
+INSIDE_MARGIN_M = 0.01
+"""`inside`: the object's centre this far within the container's outer footprint (clear of a rim's width)."""
 RIM_FORWARD_M = 0.05
 RIM_HOLD_Z_M = 0.025
 RIM_INSET_M = 0.003
@@ -98,8 +100,9 @@ PREDICATES = [
     _p("handed_over", ["object", "arm", "arm"], "the first arm held the object, then the second took it (history)"),
     _p("dropped", ["object"], "the object fell from a gripper (history; no action makes it)"),
     _p("inside", ["object", "object"], "the first object stands inside the second (a container): its centre within "
-       "the container's half width of the container's centre, its bottom below the container's rim",
-       [{"kind": "misaligned", "a": {"entity": "?1"}, "b": {"entity": "?2"}, "tol": "$hy(?2, 0)"},
+       "the container's footprint seen from above (its perceived length along its axis and width across it), "
+       "clear of the rims, and its bottom below the container's rim",
+       [{"kind": "within", "point": {"entity": "?1"}, "container": "?2", "margin": INSIDE_MARGIN_M},
         {"kind": "above", "a": {"entity": "?2", "feature": "top"}, "b": {"entity": "?1", "feature": "bottom"},
          "min_gap": 0.0}]),
     _p("moved", ["object"], "the object was carried away from where it was first seen"),

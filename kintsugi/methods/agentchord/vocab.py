@@ -8,8 +8,9 @@ from typing import Any, Callable, Sequence
 
 from kintsugi.taskgraph.vocabulary import Vocabulary
 
-FEATURES = frozenset({"centroid", "axis", "n_points", "top", "bottom", "axis_pos", "axis_neg", "opening"})
-"""ObjectFeatures' vectors: centroid, axis, and the extremes perception reports."""
+FEATURES = frozenset({"centroid", "axis", "n_points", "extent", "top", "bottom", "axis_pos", "axis_neg", "opening",
+                      "cap"})
+"""ObjectFeatures' vectors: centroid, axis, spans (`extent`) and the extremes perception reports."""
 
 
 def _checker(name: str, objects: Sequence[str]) -> Callable[[dict[str, Any]], None]:

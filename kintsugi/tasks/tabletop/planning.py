@@ -243,7 +243,15 @@ class Planner:
         below = PAD_HALF[0] if "side" in style else PAD_HALF[2]
         hover = pre.copy()
         hover[2] = max(pre[2], f.extremes["top"][2] + below + HOVER_CLEARANCE_M)
-        q_hover = self._solve(a.arm, hover, rot, arm.q, f"the pose above {a.obj}")
+        try:
+            q_hover = self._solve(a.arm, hover, rot, arm.q, f"the pose above {a.obj}")
+        except PlanError:
+            if hover[2] <= pre[2] + 1e-3:
+                raise
+            # Far out, a hand pointing down reaches lower before higher (a fallen bottle at the edge of reach):
+            # come to the pre-grasp pose itself, already above the object by the pre-grasp offset.
+            hover = pre.copy()
+            q_hover = self._solve(a.arm, hover, rot, arm.q, f"the pre-grasp pose of {a.obj}")
         steps: list[Step] = [Grip(False, "open"), *self._way_clear(a.arm, arm, q_hover, feats),
                              Move([q_hover], tcp=(hover, rot), label=f"above {a.obj} {style}")]
         q_pre = q_hover
