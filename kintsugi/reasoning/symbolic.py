@@ -1,5 +1,5 @@
 """A small STRIPS planner: typed operators grounded over the scene's arms and objects, cheapest plan by
-uniform-cost search. The embedded composer plans the nominal graph with it and the embedded arranger plans
+A* search (an admissible bound: the dearest single step a missing goal literal needs). The embedded composer plans the nominal graph with it and the embedded arranger plans
 each recovery branch (from the state a failure leaves to a merge node) with it.
 
 States are frozensets of ground atoms `("holding", "right", "bottle")` under the closed-world assumption.
@@ -128,8 +128,8 @@ Goal = tuple[frozenset[Atom], frozenset[Atom]]
 
 
 def plan(initial: State, goal: Goal, ops: list[GroundOp], max_expansions: int = MAX_EXPANSIONS) -> list[GroundOp]:
-    """The cheapest operator sequence from `initial` to a state satisfying `goal` (uniform-cost search;
-    ties broken by insertion order, so the answer is deterministic)."""
+    """The cheapest operator sequence from `initial` to a state satisfying `goal` (A* search; ties broken by
+    insertion order, so the answer is deterministic)."""
     ops = relevant(ops, goal)
     (steps,), over_budget = _search(initial, [goal], ops, max_expansions)
     if steps is not None:
@@ -153,21 +153,27 @@ def plan_each(initial: State, goals: list[Goal], ops: list[GroundOp], max_expans
 
 def _search(initial: State, goals: list[Goal], ops: list[GroundOp], max_expansions: int
             ) -> tuple[list[list[GroundOp] | None], bool]:
-    """Uniform-cost search until every goal is met (the first state popped that meets one ends the cheapest
-    plan to it); (plans, whether the budget ran out)."""
+    """A* search until every goal is met (the first state popped that meets one ends the cheapest plan to it:
+    the bound is the least over the goals still waiting, so it never overestimates the cost to any of them);
+    (plans, whether the budget ran out)."""
     found: list[list[GroundOp] | None] = [None] * len(goals)
     waiting = list(range(len(goals)))
     # Preconditions as bit masks over the atoms they name: testing every operator on every expanded state
     # was a third of a compile as frozenset comparisons.
     bit = {a: 1 << i for i, a in enumerate({a for op in ops for a in op.pre_pos | op.pre_neg})}
     masks = [(sum(bit[a] for a in op.pre_pos), sum(bit[a] for a in op.pre_neg), op) for op in ops]
+    bounds = [_step_bounds(g, ops) for g in goals]
+
+    def h(t: State) -> float:
+        return min((_bound(t, goals[i], bounds[i]) for i in waiting), default=0.0)
+
     counter = itertools.count()
-    frontier: list[tuple[float, int, State]] = [(0.0, next(counter), initial)]
+    frontier: list[tuple[float, int, float, State]] = [(h(initial), next(counter), 0.0, initial)]
     best: dict[State, float] = {initial: 0.0}
     parent: dict[State, tuple[State, GroundOp]] = {}
     expanded = 0
     while frontier:
-        cost, _, s = heapq.heappop(frontier)
+        _, _, cost, s = heapq.heappop(frontier)
         if cost > best.get(s, float("inf")):
             continue
         met = [i for i in waiting if satisfies(s, goals[i])]
@@ -194,8 +200,39 @@ def _search(initial: State, goals: list[Goal], ops: list[GroundOp], max_expansio
             if c < best.get(t, float("inf")):
                 best[t] = c
                 parent[t] = (s, op)
-                heapq.heappush(frontier, (c, next(counter), t))
+                f = c + h(t)
+                if f < float("inf"):
+                    heapq.heappush(frontier, (f, next(counter), c, t))
     return found, False
+
+
+def _step_bounds(goal: Goal, ops: list[GroundOp]) -> tuple[dict[Atom, float], dict[Atom, float]]:
+    """Per goal literal, the cheapest single step that makes it true (adds a needed atom, deletes a forbidden
+    one); a literal no step makes true is absent."""
+    adds: dict[Atom, float] = {}
+    dels: dict[Atom, float] = {}
+    for op in ops:
+        for a in goal[0] & op.add:
+            adds[a] = min(adds.get(a, float("inf")), op.cost)
+        for a in goal[1]:
+            if a in op.delete or any(matches(a, w) for w in op.wild):
+                dels[a] = min(dels.get(a, float("inf")), op.cost)
+    return adds, dels
+
+
+def _bound(s: State, goal: Goal, bounds: tuple[dict[Atom, float], dict[Atom, float]]) -> float:
+    """A lower bound on the cost from `s` to the goal (A*'s heuristic, admissible so plans stay cheapest): every
+    literal it still lacks needs a step of its own, so the dearest of those steps at least; infinite when no
+    step makes one of them true."""
+    adds, dels = bounds
+    need = 0.0
+    for a in goal[0]:
+        if a not in s:
+            need = max(need, adds.get(a, float("inf")))
+    for a in goal[1]:
+        if a in s:
+            need = max(need, dels.get(a, float("inf")))
+    return need
 
 
 def relevant(ops: list[GroundOp], goal: tuple[frozenset[Atom], frozenset[Atom]]) -> list[GroundOp]:
