@@ -182,6 +182,8 @@ class Conductor:
             observers.append(watch)
         try:
             for i, action in enumerate(edge.actions):
+                if action.name == "open_gripper" and self._open_and_empty(action.args.get("arm")):
+                    continue
                 self._execute(edge, action.name, dict(action.args))
                 if stop is not None and stop(action):
                     return None
@@ -202,6 +204,14 @@ class Conductor:
             if watch is not None:
                 observers.remove(watch)
         return None
+
+    def _open_and_empty(self, arm: Any) -> bool:
+        """The hand is open (as commanded) and its pads touch nothing: opening it again would only spend control
+        steps (a recovery's release right after the settle, which has just opened that hand)."""
+        if arm not in ARMS:
+            return False
+        state = self.robot.arm_state(arm)
+        return not state.gripper_closed and not state.touching
 
     def _step_watch(self, monitors: list, fired: list) -> Callable[[Any], bool]:
         """The per-control-step observer: Eq. 12 over `GripSense`; True (interrupt the action) on a firing."""
