@@ -56,9 +56,12 @@ class ObjectPerception:
                           for i, k in cloths.items()}
         w = self._world
         views = [render_view(w.seg_depth_renderer, w.data, cam) for cam in CAMERAS]
-        clouds = object_clouds(views, {k: self._geoms[k] for k in wanted})
+        capped = [k for k in wanted if k in self._caps]  # one pass: a cap's pixels apart, then back in its object
+        clouds = object_clouds(views, {k: self._geoms[k] - self._caps.get(k, set()) for k in wanted}
+                               | {f"{k}:cap": self._caps[k] for k in capped})
+        caps = {k: clouds.pop(f"{k}:cap") for k in capped}
+        clouds |= {k: np.concatenate([clouds[k], caps[k]]) for k in capped}
         out = {k: features(k, clouds[k], self._shapes[k].primitive(), views=views) for k in wanted}
-        caps = object_clouds(views, {k: self._caps[k] for k in wanted if k in self._caps})
         out |= {k: with_cap(out[k], cap.mean(axis=0)) for k, cap in caps.items() if len(cap) >= MIN_CAP_POINTS}
         if cloths:  # a cloth: its flex pixels (objtype FLEX), corners from the cloud's footprint
             flex_clouds = object_clouds(views, {k: {i} for i, k in cloths.items()}, objtype=int(mujoco.mjtObj.mjOBJ_FLEX),
