@@ -10,6 +10,7 @@ from __future__ import annotations
 import heapq
 import itertools
 from dataclasses import dataclass
+from typing import Iterable
 
 from kintsugi.errors import ReasoningError
 from kintsugi.reasoning.taskgraph_types import Domain, OperatorSpec, parse_atom
@@ -42,6 +43,15 @@ class GroundOp:
         # The predicates the wild patterns name: an atom of any other predicate cannot match (most of a state),
         # so apply() skips the pattern test for it; the search spent 70 % of a compile in that test.
         object.__setattr__(self, "_wild_predicates", frozenset(w[0] for w in self.wild))
+        object.__setattr__(self, "_wild_hits", {})
+
+    def wild_deletes(self, atom: Atom) -> bool:
+        """Whether a wild delete pattern removes `atom` (remembered: the arranger's searches meet the same
+        atoms again and again)."""
+        hits = self._wild_hits  # type: ignore[attr-defined]
+        if atom not in hits:
+            hits[atom] = atom[0] in self._wild_predicates and any(matches(atom, w) for w in self.wild)  # type: ignore[attr-defined]
+        return hits[atom]
 
     @property
     def label(self) -> str:
@@ -52,8 +62,7 @@ class GroundOp:
 
     def apply(self, s: State) -> State:
         if self.wild:
-            named = self._wild_predicates  # type: ignore[attr-defined]
-            s = frozenset(a for a in s if a[0] not in named or not any(matches(a, w) for w in self.wild))
+            s = frozenset(a for a in s if not self.wild_deletes(a))
         return (s - self.delete) | self.add
 
 
@@ -155,31 +164,50 @@ def _search(initial: State, goals: list[Goal], ops: list[GroundOp], max_expansio
             ) -> tuple[list[list[GroundOp] | None], bool]:
     """A* search until every goal is met (the first state popped that meets one ends the cheapest plan to it:
     the bound is the least over the goals still waiting, so it never overestimates the cost to any of them);
-    (plans, whether the budget ran out)."""
+    (plans, whether the budget ran out).
+
+    States are searched as bit masks over every atom a state can hold (the initial state's and the
+    operators' effects): applying an operator, testing its preconditions and a goal are then integer
+    operations. As frozensets they were most of a compile (a wild delete alone tested every atom of every
+    state); the expansions, and so the plans, are the same."""
     found: list[list[GroundOp] | None] = [None] * len(goals)
     waiting = list(range(len(goals)))
-    # Preconditions as bit masks over the atoms they name: testing every operator on every expanded state
-    # was a third of a compile as frozenset comparisons.
-    bit = {a: 1 << i for i, a in enumerate({a for op in ops for a in op.pre_pos | op.pre_neg})}
-    masks = [(sum(bit[a] for a in op.pre_pos), sum(bit[a] for a in op.pre_neg), op) for op in ops]
-    bounds = [_step_bounds(g, ops) for g in goals]
+    bit: dict[Atom, int] = {}
+    for a in itertools.chain(initial, *(op.add for op in ops), *(op.pre_pos | op.pre_neg | op.delete for op in ops),
+                             *(g[0] | g[1] for g in goals)):
+        bit.setdefault(a, 1 << len(bit))
 
-    def h(t: State) -> float:
-        return min((_bound(t, goals[i], bounds[i]) for i in waiting), default=0.0)
+    def mask(atoms: Iterable[Atom]) -> int:
+        return sum(bit[a] for a in set(atoms))
 
+    by_predicate: dict[str, list[Atom]] = {}
+    for a in bit:
+        by_predicate.setdefault(a[0], []).append(a)
+    steps_of = []
+    for op in ops:
+        gone = set(op.delete) | {a for p in op._wild_predicates for a in by_predicate.get(p, ())  # type: ignore[attr-defined]
+                                 if op.wild_deletes(a)}
+        steps_of.append((mask(op.pre_pos), mask(op.pre_neg), ~mask(gone - op.add), mask(op.add), op.cost, op))
+    targets = [(mask(g[0]), mask(g[1])) for g in goals]
+    bounds = [_literal_bounds(g, ops, bit) for g in goals]
+
+    def h(m: int) -> float:
+        return min((_bound(m, bounds[i]) for i in waiting), default=0.0)
+
+    start = mask(initial)
     counter = itertools.count()
-    frontier: list[tuple[float, int, float, State]] = [(h(initial), next(counter), 0.0, initial)]
-    best: dict[State, float] = {initial: 0.0}
-    parent: dict[State, tuple[State, GroundOp]] = {}
+    frontier: list[tuple[float, int, float, int]] = [(h(start), next(counter), 0.0, start)]
+    best: dict[int, float] = {start: 0.0}
+    parent: dict[int, tuple[int, GroundOp]] = {}
     expanded = 0
     while frontier:
-        _, _, cost, s = heapq.heappop(frontier)
-        if cost > best.get(s, float("inf")):
+        _, _, cost, m = heapq.heappop(frontier)
+        if cost > best.get(m, float("inf")):
             continue
-        met = [i for i in waiting if satisfies(s, goals[i])]
+        met = [i for i in waiting if m & targets[i][0] == targets[i][0] and not m & targets[i][1]]
         if met:
             steps: list[GroundOp] = []
-            t = s
+            t = m
             while t in parent:
                 t, op = parent[t]
                 steps.append(op)
@@ -191,48 +219,40 @@ def _search(initial: State, goals: list[Goal], ops: list[GroundOp], max_expansio
         expanded += 1
         if expanded > max_expansions:
             return found, True
-        m = sum(bit.get(a, 0) for a in s)
-        for pos, neg, op in masks:
+        for pos, neg, keep, add, op_cost, op in steps_of:
             if m & pos != pos or m & neg:
                 continue
-            t = op.apply(s)
-            c = cost + op.cost
+            t = (m & keep) | add
+            c = cost + op_cost
             if c < best.get(t, float("inf")):
                 best[t] = c
-                parent[t] = (s, op)
+                parent[t] = (m, op)
                 f = c + h(t)
                 if f < float("inf"):
                     heapq.heappush(frontier, (f, next(counter), c, t))
     return found, False
 
 
-def _step_bounds(goal: Goal, ops: list[GroundOp]) -> tuple[dict[Atom, float], dict[Atom, float]]:
+def _literal_bounds(goal: Goal, ops: list[GroundOp], bit: dict[Atom, int]) -> list[tuple[float, int, bool]]:
     """Per goal literal, the cheapest single step that makes it true (adds a needed atom, deletes a forbidden
-    one); a literal no step makes true is absent."""
-    adds: dict[Atom, float] = {}
-    dels: dict[Atom, float] = {}
-    for op in ops:
-        for a in goal[0] & op.add:
-            adds[a] = min(adds.get(a, float("inf")), op.cost)
-        for a in goal[1]:
-            if a in op.delete or any(matches(a, w) for w in op.wild):
-                dels[a] = min(dels.get(a, float("inf")), op.cost)
-    return adds, dels
-
-
-def _bound(s: State, goal: Goal, bounds: tuple[dict[Atom, float], dict[Atom, float]]) -> float:
-    """A lower bound on the cost from `s` to the goal (A*'s heuristic, admissible so plans stay cheapest): every
-    literal it still lacks needs a step of its own, so the dearest of those steps at least; infinite when no
-    step makes one of them true."""
-    adds, dels = bounds
-    need = 0.0
+    one; infinite when none does), as (cost, the atom's bit, whether it must be present), dearest first."""
+    out = []
     for a in goal[0]:
-        if a not in s:
-            need = max(need, adds.get(a, float("inf")))
+        out.append((min((op.cost for op in ops if a in op.add), default=float("inf")), bit[a], True))
     for a in goal[1]:
-        if a in s:
-            need = max(need, dels.get(a, float("inf")))
-    return need
+        out.append((min((op.cost for op in ops if a in op.delete or any(matches(a, w) for w in op.wild)),
+                        default=float("inf")), bit[a], False))
+    return sorted(out, key=lambda x: -x[0])
+
+
+def _bound(m: int, literals: list[tuple[float, int, bool]]) -> float:
+    """A lower bound on the cost from state `m` to the goal (A*'s heuristic, admissible so plans stay
+    cheapest): every literal it still lacks needs a step of its own, so the dearest of those steps at least
+    (the first unmet literal, dearest first); infinite when no step makes one of them true."""
+    for cost, b, present in literals:
+        if bool(m & b) != present:
+            return cost
+    return 0.0
 
 
 def relevant(ops: list[GroundOp], goal: tuple[frozenset[Atom], frozenset[Atom]]) -> list[GroundOp]:
@@ -241,6 +261,9 @@ def relevant(ops: list[GroundOp], goal: tuple[frozenset[Atom], frozenset[Atom]])
     keeps every cheapest plan (with positive costs, a step that does neither only adds cost) and shrinks the
     search: the arranger's plans for rearrange-table went from minutes to seconds."""
     need_true, need_false = set(goal[0]), set(goal[1])
+    false_by_predicate: dict[str, set[Atom]] = {}  # a wild delete can only match atoms of its own predicate
+    for a in need_false:
+        false_by_predicate.setdefault(a[0], set()).add(a)
     keep = [False] * len(ops)
     changed = True
     while changed:
@@ -249,11 +272,13 @@ def relevant(ops: list[GroundOp], goal: tuple[frozenset[Atom], frozenset[Atom]])
             if keep[i]:
                 continue
             helps = (not op.add.isdisjoint(need_true) or not op.delete.isdisjoint(need_false)
-                     or any(matches(a, w) for w in op.wild for a in need_false))
+                     or any(matches(a, w) for w in op.wild for a in false_by_predicate.get(w[0], ())))
             if helps:
                 keep[i] = changed = True
                 need_true |= op.pre_pos
                 need_false |= op.pre_neg
+                for a in op.pre_neg:
+                    false_by_predicate.setdefault(a[0], set()).add(a)
     return [op for op, k in zip(ops, keep) if k]
 
 
