@@ -106,6 +106,18 @@ def _tilt_deg(axis, gravity: Vec3) -> float:
     return math.degrees(math.acos(min(1.0, abs(ax * gx + ay * gy + az * gz) / n)))
 
 
+def _top_tilt_deg(obj: object, gravity: Vec3) -> float:
+    """The object's tilt from standing: sign-free (0-90 degrees), or from its top (0-180) when the top is known,
+    by a seen cap or the robot's tracked top; one whose top is below its centre reads 180 - the axis's tilt."""
+    tilt = _tilt_deg(getattr(obj, "axis", None), gravity)
+    top, centre = vector_feature(obj, "cap"), vector_feature(obj, "centroid")
+    if top is None:
+        top = vector_feature(obj, "tracked_top")
+    if top is not None and centre is not None and _dot(top, gravity) > _dot(centre, gravity):
+        tilt = 180.0 - tilt
+    return tilt
+
+
 def _dot(a, b) -> float:
     return float(a[0]) * float(b[0]) + float(a[1]) * float(b[1]) + float(a[2]) * float(b[2])
 
@@ -161,8 +173,8 @@ class Drift(_Template):
 
 class Upright(_Template):
     """Eq. 15, uprightness: angle(principal axis, gravity) - tol (degrees). The axis has no sign, unless the
-    object shows its top (extreme `cap`, a bottle's painted cap): one whose cap is below its centre stands
-    on its head and reads 180 - angle."""
+    object shows its top (extreme `cap`, a bottle's painted cap) or the robot tracked it (extreme
+    `tracked_top`): one whose top is below its centre stands on its head and reads 180 - angle."""
 
     kind: Literal["upright"] = "upright"
     object: Name
@@ -171,20 +183,15 @@ class Upright(_Template):
 
     def evaluate(self, f: Features) -> float:
         obj = f.objects.get(self.object)
-        if obj is None:
-            return NAN
-        tilt = _tilt_deg(obj.axis, self.gravity)
-        cap, centre = vector_feature(obj, "cap"), vector_feature(obj, "centroid")
-        if cap is not None and centre is not None and _dot(cap, self.gravity) > _dot(centre, self.gravity):
-            tilt = 180.0 - tilt
-        return tilt - self.tol_deg
+        return NAN if obj is None else _top_tilt_deg(obj, self.gravity) - self.tol_deg
 
     def refs(self):
         yield (self.object, "object", "axis")
 
 
 class Tilted(_Template):
-    """Tilted at least `min_deg` from gravity (e.g. a bottle pouring): min_deg - angle."""
+    """Tilted at least `min_deg` from gravity (e.g. a bottle pouring): min_deg - angle; measured from the top
+    when it is known, as for `upright` (a bottle on its head is tilted 180 degrees)."""
 
     kind: Literal["tilted"] = "tilted"
     object: Name
@@ -193,7 +200,7 @@ class Tilted(_Template):
 
     def evaluate(self, f: Features) -> float:
         obj = f.objects.get(self.object)
-        return NAN if obj is None else self.min_deg - _tilt_deg(obj.axis, self.gravity)
+        return NAN if obj is None else self.min_deg - _top_tilt_deg(obj, self.gravity)
 
     def refs(self):
         yield (self.object, "object", "axis")

@@ -5,7 +5,9 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any, Iterable
+from typing import Any, Iterable, Mapping
+
+import numpy as np
 
 from kintsugi.reasoning.taskgraph_types import SeenArm, SeenObject
 from kintsugi.taskgraph.features import ArmState, Features
@@ -52,8 +54,23 @@ def monitored(f: Any) -> Any:
     return AxisFree(f.centroid, f.n_points, f.extremes) if f.upright is None else f
 
 
-def features(robot: Any, objects: Iterable[str] | None = None, cached: dict[str, Any] | None = None) -> Features:
-    """The feature vector now: objects perceived (or `cached` when perception is not re-run this step)."""
+def with_tracked_top(f: Any, top: Any) -> Any:
+    """The features plus extreme `tracked_top`: the end of the perceived axis on the side of the top the robot
+    keeps track of (`Tops`: its encoders while it held the object, continuity while it fell). A bottle that
+    landed on its head with its cap hidden (in a cup) looks upright to the cameras; the robot knows better."""
+    ex = getattr(f, "extremes", None) or {}
+    if top is None or f.axis is None or "cap" in ex or "axis_pos" not in ex or "axis_neg" not in ex:
+        return f
+    end = ex["axis_pos"] if float(np.dot(f.axis, top)) >= 0.0 else ex["axis_neg"]
+    return f.model_copy(update={"extremes": {**ex, "tracked_top": end}})
+
+
+def features(robot: Any, objects: Iterable[str] | None = None, cached: dict[str, Any] | None = None,
+             tops: Mapping[str, Any] | None = None) -> Features:
+    """The feature vector now: objects perceived (or `cached` when perception is not re-run this step), with
+    the robot's tracked top of each object it keeps one for (`tops`)."""
     objs = cached if cached is not None else robot.features(objects)
-    visible = {k: monitored(f) for k, f in objs.items() if f.visible and f.centroid is not None}
+    tops = tops or {}
+    visible = {k: monitored(with_tracked_top(f, tops.get(k))) for k, f in objs.items()
+               if f.visible and f.centroid is not None}
     return Features(objects=visible, arms={a: arm_features(robot.arm_state(a)) for a in ARMS})
