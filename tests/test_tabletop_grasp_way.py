@@ -112,3 +112,41 @@ def test_at_the_edge_of_reach_the_grasp_skips_the_pose_above_and_comes_to_the_pr
     assert "pre-grasp bottle" not in _labels(steps) and _labels(steps)[-2:] == ["approach bottle", "close"]
     first = next(s for s in steps if isinstance(s, Move))
     assert first.tcp[0][2] == pytest.approx(far.centroid[2] + 0.06, abs=1e-6)  # the pre-grasp pose, not higher
+
+
+def _propped(elevation_deg: float, x: float = 0.45, y: float = -0.15) -> ObjectFeatures:
+    """A bottle lying along y with its far end raised `elevation_deg` (leaning on something)."""
+    e = np.radians(elevation_deg)
+    axis = (0.0, float(np.cos(e)), float(np.sin(e)))
+    c = np.array([x, y, 0.03 + 0.1 * np.sin(e)])
+    ends = [tuple(c + s * 0.1 * np.array(axis)) for s in (1, -1)]
+    return ObjectFeatures(name="bottle", visible=True, n_points=500, fit="primitive", centroid=tuple(c), axis=axis,
+                          extent=(0.2, 0.06, 0.06), tilt_deg=90.0 - elevation_deg, upright=False,
+                          extremes={"top": (x, y, c[2] + 0.03), "bottom": (x, y, 0.0), "axis_pos": ends[0],
+                                    "axis_neg": ends[1]})
+
+
+def _grasp_rot(planner: Planner, f: ObjectFeatures) -> np.ndarray:
+    home = planner.iks["right"].home
+    pos, rot = planner.iks["right"].fk(home)
+    view = ArmView(q=home.copy(), pos=pos, rot=rot, base=BASE, touching={})
+    steps = planner._grasp(A.Grasp(arm="right", obj="bottle", pre_grasp_offset=0.06), view, {"bottle": f})
+    return next(s for s in steps if isinstance(s, Move) and s.label == "approach bottle").tcp[1]
+
+
+@pytest.mark.parametrize("elevation", [15.0, 30.0, 40.0])
+def test_a_bottle_propped_up_is_taken_square_to_its_axis(planner: Planner, elevation: float) -> None:
+    """Leaning 30 degrees on the cup (pour-single seed 86), a hand straight down met the raised end with its palm
+    and closed on nothing ten times; pitched about its closing axis, it approaches square to the bottle."""
+    f = _propped(elevation)
+    rot = _grasp_rot(planner, f)
+    closing, approach = rot[:, 1], rot[:, 2]
+    assert abs(closing @ np.array(f.axis)) < 1e-6 and abs(closing[2]) < 1e-6  # still across it, level
+    assert abs(approach @ np.array(f.axis)) < 1e-6  # square to the axis
+    assert approach[2] == pytest.approx(-np.cos(np.radians(elevation)), abs=1e-6)  # coming down, pitched by it
+
+
+@pytest.mark.parametrize("elevation", [0.0, 5.0])
+def test_a_bottle_lying_on_the_table_is_still_taken_straight_down(planner: Planner, elevation: float) -> None:
+    rot = _grasp_rot(planner, _propped(elevation))
+    assert rot[:, 2] == pytest.approx([0.0, 0.0, -1.0], abs=1e-9)
