@@ -305,8 +305,12 @@ def _chain(request: ArrangerRequest, graph: TaskGraph, edge: Any, mode: FailureM
 
     merge, steps = _merge(start, edge, graph, facts, ops, ctg)
     if not steps:
+        # Every hand the failure emptied opens: an object two arms carried fell from both, and a merge that
+        # counts both hands empty must not leave the other still closed on it (coffee-tray seed 0: the tray
+        # fell into its region, the left hand opened, the right still held it, and the goal was called met).
+        opens = sorted({arm} | {a[1] for a in facts[edge.source] - start if a[0] == "holding"})
         return [], [{"id": f"re.{tag}.1", "source": source, "target": merge, "cost": RELEASE_COST, "guard": guard,
-                     "actions": [{"name": "open_gripper", "args": {"arm": arm}}],
+                     "actions": [{"name": "open_gripper", "args": {"arm": a}} for a in opens],
                      "description": f"recovery for {mode.name}: {merge} already holds, release"}]
     nodes, edges = [], []
     prev, state = source, start
