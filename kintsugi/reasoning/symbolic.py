@@ -240,7 +240,7 @@ def _literal_bounds(goal: Goal, ops: list[GroundOp], bit: dict[Atom, int]) -> li
     for a in goal[0]:
         out.append((min((op.cost for op in ops if a in op.add), default=float("inf")), bit[a], True))
     for a in goal[1]:
-        out.append((min((op.cost for op in ops if a in op.delete or any(matches(a, w) for w in op.wild)),
+        out.append((min((op.cost for op in ops if a in op.delete or op.wild_deletes(a)),
                         default=float("inf")), bit[a], False))
     return sorted(out, key=lambda x: -x[0])
 
@@ -272,7 +272,7 @@ def relevant(ops: list[GroundOp], goal: tuple[frozenset[Atom], frozenset[Atom]])
             if keep[i]:
                 continue
             helps = (not op.add.isdisjoint(need_true) or not op.delete.isdisjoint(need_false)
-                     or any(matches(a, w) for w in op.wild for a in false_by_predicate.get(w[0], ())))
+                     or any(op.wild_deletes(a) for w in op.wild for a in false_by_predicate.get(w[0], ())))
             if helps:
                 keep[i] = changed = True
                 need_true |= op.pre_pos

@@ -174,7 +174,7 @@ class Conductor:
         per_step = [m for m in monitors if observers is not None and proprioceptive(m.check)]
         # Sub-goal samples: one per atomic action, so one violated sample meets the window.
         sampled = [m.model_copy(update={"window": 1}) for m in monitors if m not in per_step]
-        start = features(self.robot, objs, tops=self.tops.world) if sampled else None
+        start = self._read(objs) if sampled else None
         bank = MonitorBank(sampled, start) if sampled else None
         fired: list[tuple[Firing, int]] = []
         watch = self._step_watch(per_step, fired) if per_step else None
@@ -195,7 +195,7 @@ class Conductor:
                     self.metrics.fired_at = self.robot_steps()
                     return Firing("verifier", "verify_failed", None, float("nan"), i)
                 if bank is not None:
-                    firing = bank.step(features(self.robot, objs, tops=self.tops.world))
+                    firing = bank.step(self._read(objs))
                     if firing is not None:
                         self.metrics.fired_at = self.robot_steps()
                         self._fired(edge, firing)
@@ -240,7 +240,7 @@ class Conductor:
         names = {e for n in upto for c in self.graph.node(n).constraints for e, role, _ in c.refs() if role != "arm"}
         if arm is not None:
             self.wait_still(arm, names | _objects_of(failed), failed)
-        f = features(self.robot, names, tops=self.tops.world)
+        f = self._read(names)
         for n in reversed(upto):
             if all(not c.evaluate(f) > 0.0 for c in self.graph.node(n).constraints):
                 self.log.event(self.robot.sim_time, "backtrack", f"{firing.failure_mode} on {failed.id}: back to {n!r}")
@@ -260,7 +260,7 @@ class Conductor:
         bound = [m.model_copy(update={"window": 1}) for m in edge.monitors if m.check.bound]
         if not bound:
             return None
-        firing = MonitorBank(bound).step(features(self.robot, _objects_of(edge), tops=self.tops.world))
+        firing = MonitorBank(bound).step(self._read(_objects_of(edge)))
         if firing is not None:
             self.metrics.fired_at = self.robot_steps()
             self._fired(edge, firing)
@@ -294,7 +294,7 @@ class Conductor:
             arm, objs = firing_arm(failed, firing), _guard_objects(g, edge.target)
             if arm is not None and objs and _moves(edge):  # the edge may have nudged what the guards read (a hand
                 self.wait_still(arm, objs, edge)  # rising past a bottle leaning on the held cup): read it at rest
-            nxt, matched = guarded_next_edge(g, edge.target, features(self.robot, objs, tops=self.tops.world), self.ctg)
+            nxt, matched = guarded_next_edge(g, edge.target, self._read(objs), self.ctg)
             if nxt is None:  # cannot happen on an Eq. 8-filtered graph: every recovery node merges
                 raise ConductorError(f"recovery node {edge.target!r} has no way back into the graph")
             if not matched:
@@ -318,7 +318,7 @@ class Conductor:
             self.metrics.fired_at = watch.at
             return watch.lost
         node = self.graph.node(edge.target)
-        bad = unmet(node, features(self.robot, watched(node), tops=self.tops.world)) if node.constraints else None
+        bad = unmet(node, self._read(watched(node))) if node.constraints else None
         if bad is not None:
             self.metrics.fired_at = self.robot_steps()
             return f"{edge.target!r}: {bad} violated"
@@ -409,6 +409,10 @@ class Conductor:
         self.metrics.keyframe_solves += 1
         return move
 
+    def _read(self, objs) -> Features:  # noqa: ANN001 - names of objects
+        """The feature vector the checks read: perceived objects plus the top this conductor tracks for each."""
+        return features(self.robot, objs, tops=self.tops.world)
+
     def goal_holds(self) -> bool:
         goal = self.graph.node(self.graph.goal)
         names = {e for c in goal.constraints for e, role, _ in c.refs() if role != "arm"}
@@ -419,7 +423,7 @@ class Conductor:
                 self.log.event(self.robot.sim_time, "goal check", f"{', '.join(sorted(names))} still moving after "
                                f"{SETTLE_TRIES} reads; the goal is not reached at rest")
                 return False
-        f = features(self.robot, names, tops=self.tops.world)
+        f = self._read(names)
         values = [(c.kind, c.evaluate(f)) for c in goal.constraints]
         bad = [k for k, v in values if v > 0.0]
         unknown = [k for k, v in values if v != v]  # NaN: perception could not decide
