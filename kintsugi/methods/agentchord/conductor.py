@@ -31,6 +31,7 @@ from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyfram
 from kintsugi.methods.agentchord.observe import ARMS, features
 from kintsugi.methods.agentchord.synthesis import EdgeSynthesis
 from kintsugi.methods.agentchord.tops import Heads, Tops
+from kintsugi.perception.features import ObjectFeatures
 from kintsugi.taskgraph.features import Features
 from kintsugi.taskgraph.forward import cost_to_go, guarded_next_edge, next_edge
 from kintsugi.taskgraph.model import Edge, TaskGraph
@@ -46,6 +47,12 @@ SETTLE_DEG = 0.2
 SETTLE_READS = 2
 """Consecutive still pairs required (one pair can alias with a rocking object's period)."""
 SETTLE_TRIES = 25
+CAUGHT_CLEAR_M = 0.02
+"""An object whose lowest perceived point is this far above the table does not rest on it."""
+MAX_SET_DOWNS = 2
+SET_DOWN_TRIES = 6
+SET_DOWN_MARGIN_M = 0.03
+"""A caught object is set down this far (beyond both objects' half extents) from every other object."""
 
 
 class ConductorError(KintsugiError):
@@ -337,7 +344,7 @@ class Conductor:
         """True once the objects are at rest; False if they still move after SETTLE_TRIES reads."""
         if not objs:
             return True
-        prev, still = None, 0
+        prev, still, set_downs = None, 0, 0
         for _ in range(SETTLE_TRIES):
             self._execute(edge, "open_gripper", {"arm": arm})
             now = self.robot.features(objs)
@@ -356,11 +363,40 @@ class Conductor:
                         moved = moved or np.degrees(np.arccos(min(1.0, cos))) > SETTLE_DEG
             still = 0 if moved else still + 1
             if still >= SETTLE_READS:
+                if set_downs < MAX_SET_DOWNS and self._set_down_caught(arm, now, edge):
+                    set_downs, prev, still = set_downs + 1, None, 0
+                    continue
                 return True
             prev = (pts, axes)
         return False
 
-    def _execute(self, edge: Edge, name: str, args: dict) -> None:
+    def _set_down_caught(self, arm: str, seen: dict, edge: Edge) -> bool:
+        """An object that came to rest in the open hand (both finger pads touch it, and it hangs clear of the
+        table) is closed on, turned top up when its top is known, and set down on the table, at the nearest spot clear of every other object; True if
+        one was. A bottle dropped while the hand was turned over to pour fell across the open fingers and stayed
+        there; the re-grasp's rise to its pose above carried it along and flung it out of reach (pour-dual seeds
+        86 and 88). Set down straight below, it lay where the other hand was lowering the cup."""
+        touching = self.robot.arm_state(arm).touching
+        caught = [k for k in sorted(seen) if touching.get(k) == 2 and seen[k].centroid is not None
+                  and seen[k].extremes and seen[k].extremes["bottom"][2] > CAUGHT_CLEAR_M]
+        if not caught:
+            return False
+        obj = caught[0]
+        self.log.event(self.robot.sim_time, "caught", f"{obj} rests in the open {arm} hand: set it down")
+        self._execute(edge, "close_gripper", {"arm": arm})
+        turn = self.synthesis.upright_call({"action": "rotate_eef", "arm": arm, "angle_deg": 0.0, "axis": "closing"})
+        if turn["action"] == "move_by_offset":  # its top is known: stand it on its base
+            self._execute(edge, "move_by_offset", {k: v for k, v in turn.items() if k != "action"})
+        others = [f for k, f in self.robot.features().items() if k != obj and f.centroid is not None]
+        for x, y in set_down_spots(seen[obj], others, self.robot.bases[arm])[:SET_DOWN_TRIES]:
+            if self._execute(edge, "place", {"arm": arm, "x": round(x, 4), "y": round(y, 4)}, unplanned_ok=True):
+                return True
+        self._execute(edge, "open_gripper", {"arm": arm})
+        return True
+
+    def _execute(self, edge: Edge, name: str, args: dict, unplanned_ok: bool = False) -> bool:
+        """Run one atomic action; False when it could not be planned and `unplanned_ok` (nothing moved), else
+        an unplannable action raises."""
         if self.metrics.actions >= self.config.max_actions:
             raise ConductorError(f"{self.config.max_actions} atomic actions spent without reaching the goal")
         call = {"action": name, **args}
@@ -389,11 +425,14 @@ class Conductor:
         tag = "[magenta]recovery[/magenta] " if edge.kind == "recovery" else ""
         self.log.say(f"[dim]{self.robot.sim_time:6.2f}s[/dim] {tag}{escape(edge.id)}: [bold]{escape(call['action'])}"
                      f"[/bold] -> {flag} ({escape(result.message)})", markup=True)
+        if not result.planned and unplanned_ok:
+            return False
         if result.ik_failed:
             raise KeyframeError(f"{edge.id} {name}: {result.message}")
         if not result.planned:  # e.g. the object left the cameras' view (fell off the table): nothing moved, and
             # running it again in the same still scene would only refuse again
             raise ConductorError(f"{edge.id} {name} cannot be carried out: {result.message}")
+        return True
 
     def _keyframe_call(self, edge: Edge, call: dict) -> dict:
         arm = call["arm"]
@@ -431,4 +470,20 @@ class Conductor:
             self.log.event(self.robot.sim_time, "goal check", f"goal {goal.id!r}: violated {', '.join(bad) or '-'}; "
                            f"undecided {', '.join(unknown) or '-'}")
         return not bad
+
+
+def set_down_spots(obj: ObjectFeatures, others: list[ObjectFeatures], base: np.ndarray) -> list[tuple[float, float]]:
+    """Table spots (x, y) to set a caught object down at, nearest first (ties: nearer the arm's base, easier
+    to reach): below where it hangs, or rings around that 5 cm apart, clear of every other object's extent."""
+    c = np.asarray(obj.centroid, dtype=float)[:2]
+    half = max(obj.extent or (0.0,)) / 2.0
+    spots = [c] + [c + r * np.array([np.cos(a), np.sin(a)]) for r in np.arange(0.05, 0.31, 0.05)
+                   for a in np.linspace(0.0, 2.0 * np.pi, 16, endpoint=False)]
+    spots.sort(key=lambda p: (round(float(np.linalg.norm(p - c)), 3), float(np.linalg.norm(p - base[:2]))))
+
+    def clear(p: np.ndarray) -> bool:
+        return all(np.linalg.norm(p - np.asarray(o.centroid, dtype=float)[:2])
+                   >= half + max(o.extent or (0.0,)) / 2.0 + SET_DOWN_MARGIN_M for o in others)
+
+    return [(float(p[0]), float(p[1])) for p in spots if clear(p)]
 

@@ -53,7 +53,7 @@ class EdgeSynthesis:
         """The call to send for one of the edge's atomic actions."""
         name = call["action"]
         if name == "rotate_eef" and call.get("axis") == "closing" and self._wants_upright(edge):
-            call = self._upright_call(call)
+            call = self.upright_call(call)
         if name == "drive":
             call = self._carry_call(edge, call)
         if name == "rotate_eef" and call.get("axis") == "approach":
@@ -68,7 +68,7 @@ class EdgeSynthesis:
     def _wants_upright(self, edge: Edge) -> bool:
         return any(c.kind == "upright" for c in self.graph.node(edge.target).constraints)
 
-    def _upright_call(self, call: dict) -> dict:
+    def upright_call(self, call: dict) -> dict:
         """Edge synthesis (Eq. 10) of a turn toward an upright sub-goal: the hand orientation that puts the held
         object's known top up, level and facing away from the shoulder; as given when nothing held has a top.
         Of the facings, the first whose whole turn the arm follows on its own branch (every waypoint's IK, no
@@ -116,7 +116,7 @@ class EdgeSynthesis:
         """Edge synthesis (Eq. 10) of the top-down grasp that begins standing a lying object up (the edge goes
         on to turn the hand toward an upright sub-goal): of the two hand yaws that close across it (a parallel
         gripper is the same either way round), the one from which the whole stand-up is best followed: grasp,
-        lift, then the turn that brings the object's known top up (`_upright_call`), with the most room left at
+        lift, then the turn that brings the object's known top up (`upright_call`), with the most room left at
         the joints. The two end a half turn apart about the approach axis: one left the wrist's last roll at its
         limit. None (the default grasp) when the edge stands nothing up, the top is unknown, or after a miss."""
         from kintsugi.methods.agentchord.domain import UPEND_LIFT_M
