@@ -263,8 +263,13 @@ class Conductor:
         return out
 
     def _recheck(self, edge: Edge) -> Firing | None:
-        """After a recovery merged: the failed edge's monitors that need no edge-start reference, read once."""
-        bound = [m.model_copy(update={"window": 1}) for m in edge.monitors if m.check.bound]
+        """After a recovery merged: the failed edge's monitors that need no edge-start reference, read once, but
+        not the drop checks (touch): `LossWatch` judged those during the recovery with Eq. 12's window, as the
+        nominal edge's watch does. Read once more here, a hand that lost touch in the last control steps of a
+        two-arm carry (the tray set on the table slid out of the left pads) fired with no window, and the same
+        recovery ran again and again (coffee-tray seed 13: four times, 1780 steps against rekep's 1240)."""
+        bound = [m.model_copy(update={"window": 1}) for m in edge.monitors
+                 if m.check.bound and m.check.kind != "touching"]
         if not bound:
             return None
         firing = MonitorBank(bound).step(self._read(_objects_of(edge)))
