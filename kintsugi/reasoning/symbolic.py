@@ -188,6 +188,17 @@ def _search(initial: State, goals: list[Goal], ops: list[GroundOp], max_expansio
         gone = set(op.delete) | {a for p in op._wild_predicates for a in by_predicate.get(p, ())  # type: ignore[attr-defined]
                                  if op.wild_deletes(a)}
         steps_of.append((mask(op.pre_pos), mask(op.pre_neg), ~mask(gone - op.add), mask(op.add), op.cost, op))
+    # Each operator filed under one of its positive preconditions (the one with the most arguments, the rarest
+    # true: holding(left, fork) rather than hand_empty(left)): a state tries only the operators filed under an
+    # atom it holds, in their order (so the plans, ties included, are those of trying all of them).
+    filed: dict[int, list[int]] = {}
+    always: list[int] = []
+    for i, op in enumerate(ops):
+        if op.pre_pos:
+            filed.setdefault(bit[max(sorted(op.pre_pos), key=len)], []).append(i)
+        else:
+            always.append(i)
+    keys = list(filed.items())
     targets = [(mask(g[0]), mask(g[1])) for g in goals]
     bounds = [_literal_bounds(g, ops, bit) for g in goals]
 
@@ -219,7 +230,10 @@ def _search(initial: State, goals: list[Goal], ops: list[GroundOp], max_expansio
         expanded += 1
         if expanded > max_expansions:
             return found, True
-        for pos, neg, keep, add, op_cost, op in steps_of:
+        tried = always + [i for k, idx in keys if m & k for i in idx]
+        tried.sort()
+        for i in tried:
+            pos, neg, keep, add, op_cost, op = steps_of[i]
             if m & pos != pos or m & neg:
                 continue
             t = (m & keep) | add

@@ -9,6 +9,7 @@ simulator's truth. Graphs travel as plain JSON (`graph`, `proposals`) and are ch
 
 from __future__ import annotations
 
+import functools
 import re
 from typing import Annotated, Literal
 
@@ -27,8 +28,10 @@ FAILURE_MODES = ("missed_grasp", "object_moved", "toppled", "drop", "slip", "ik_
 """The failure modes the arranger is asked to anticipate (issue 8)."""
 
 
+@functools.lru_cache(maxsize=8192)
 def parse_atom(text: str) -> tuple[bool, str, tuple[str, ...]]:
-    """`not holding(?arm, bottle)` -> (False, "holding", ("?arm", "bottle")); ValueError if malformed."""
+    """`not holding(?arm, bottle)` -> (False, "holding", ("?arm", "bottle")); ValueError if malformed.
+    Remembered: grounding a domain parses the same few hundred literals thousands of times."""
     m = ATOM.match(text)
     if not m:
         raise ValueError(f"{text!r} is not a literal like pred(a, b) or not pred(a)")
