@@ -130,3 +130,15 @@ def test_the_cup_is_fitted_upright_and_one_hand_wide(seed: int) -> None:
     assert cup.fit == "primitive" and cup.upright, cup.note
     assert max(cup.extent[1:]) < 0.095
     assert abs(cup.centroid[0] - truth[0]) < 0.002 and abs(cup.centroid[1] - truth[1]) < 0.002
+
+
+def test_handover_block_dropped_into_the_region_then_touched_fails() -> None:
+    """After the drop, the closed empty hand goes through a place onto the block that fell into the region and
+    its pads touch it: a touch is no hold, so its letting go is no place (inner-monologue seed 13 at drop
+    p 0.10 was scored a success that way)."""
+    ok, d = _play("handover-block", lambda s: _let_go_over_the_region(s) + [
+        {"action": "close_gripper", "arm": "right"},
+        {"action": "place", "arm": "right", "x": 0.40, "y": -0.25},
+        {"action": "back", "arm": "right"}])
+    assert d["in_region"] and d["drops"] == 1, d
+    assert not d["placed"] and not ok, d

@@ -40,6 +40,8 @@ DROP_TICKS = 5
 (a single tick without a pad contact is the contact solver flickering, not a fall)."""
 PLACED_ABOVE_M = 0.01
 """A release with the block's lowest corner at most this far above the table is a place; higher is a drop."""
+HOLD_OPENING_M = 0.01
+"""The fingers are at least this far apart when they hold the block (it is 5 cm wide)."""
 
 
 def script(obs: Any) -> list[dict[str, Any]]:
@@ -94,19 +96,21 @@ class HandoverScorer:
         self._free_ticks = 0
         self._holder: str | None = None
         self.release: tuple[str, float] | None = None
-        """(the hand that let go last, the block's height above rest then)."""
+        """(the hand that let go last, the block's height above rest then): a let-go ends a hold of both pads."""
 
     def watch(self, world: TabletopWorld) -> None:
         left, right = world.pad_contacts("left")[0], world.pad_contacts("right")[0]
-        by_left, by_right = left.get("block") == 2, right.get("block") == 2
+        # A hold: both pads on the block, apart (fingers shut on each other can press both pads on its top).
+        by_left, by_right = ((contacts.get("block") == 2 and world.gripper_opening(arm) > HOLD_OPENING_M)
+                             for arm, contacts in (("left", left), ("right", right)))
         z = float(world.data.xpos[world.bodies["block"]][2])
         off_table = z > self.rest_h + 0.01
         self.picked |= by_left and off_table
         self.both |= by_left and by_right
         self.right_alone |= self.both and by_right and "block" not in left
         free = "block" not in left and "block" not in right
-        if not free:
-            self._holder = "right" if "block" not in left else "left" if "block" not in right else "both"
+        if by_left or by_right:  # a pad brushing the block is no hold, nor its lifting away a place
+            self._holder = "right" if not by_left else "left" if not by_right else "both"
         elif self._holder is not None and self.picked:
             tilt = np.abs(world.data.xmat[world.bodies["block"]].reshape(3, 3)[2, :])
             self.release = (self._holder, z - float(tilt @ self.half))  # the table top is z = 0
