@@ -191,6 +191,8 @@ class Conductor:
             for i, action in enumerate(edge.actions):
                 if action.name == "open_gripper" and self._already_open(action.args.get("arm")):
                     continue
+                if action.name == "place" and self._holds_nothing(action.args.get("arm")):
+                    continue
                 self._execute(edge, action.name, dict(action.args))
                 if stop is not None and stop(action):
                     return None
@@ -220,6 +222,14 @@ class Conductor:
         if arm not in ARMS:
             return False
         return not self.robot.arm_state(arm).gripper_closed
+
+    def _holds_nothing(self, arm: Any) -> bool:
+        """No object is between the hand's pads: a place would lower the empty hand onto whatever is at the
+        place (a recovery run again after a later drop re-ran the other arm's place of the cup it had already
+        put down, and pressed the empty hand onto the cup)."""
+        if arm not in ARMS:
+            return False
+        return not any(n == 2 for n in self.robot.arm_state(arm).touching.values())
 
     def _step_watch(self, monitors: list, fired: list) -> Callable[[Any], bool]:
         """The per-control-step observer: Eq. 12 over `GripSense`; True (interrupt the action) on a firing."""
@@ -388,8 +398,14 @@ class Conductor:
         if not caught:
             return False
         obj = caught[0]
-        self.log.event(self.robot.sim_time, "caught", f"{obj} rests in the open {arm} hand: set it down")
+        f = seen[obj]
+        tcp = np.asarray(self.robot.arm_state(arm).tcp_pos)
+        along = (float((tcp - np.asarray(f.centroid)) @ np.asarray(f.axis)) / max(f.extent[0] / 2.0, 1e-6)
+                 if f.axis is not None and f.extent else float("nan"))
+        self.log.event(self.robot.sim_time, "caught", f"{obj} rests in the open {arm} hand ({along:+.2f} of its "
+                       "half length from its centre): set it down")
         self._execute(edge, "close_gripper", {"arm": arm})
+        self.tops.regrip(arm, obj, self.robot.features({obj}), self.robot.arm_state(arm))
         turn = self.synthesis.upright_call({"action": "rotate_eef", "arm": arm, "angle_deg": 0.0, "axis": "closing"})
         if turn["action"] == "move_by_offset":  # its top is known: stand it on its base
             self._execute(edge, "move_by_offset", {k: v for k, v in turn.items() if k != "action"})

@@ -73,6 +73,13 @@ class Tops:
             for key in [k for k in self.in_hand if k[0] == arm and k[1] not in held]:
                 self.world[key[1]] = rot @ self.in_hand.pop(key)
 
+    def regrip(self, arm: str, obj: str, seen: Mapping[str, Any], arm_state: Any) -> None:
+        """The hand closed on an object that had shifted in it (caught in the open fingers): its pose in the
+        hand is read again from what is seen now, not carried over from the grasp it slipped from."""
+        self.in_hand.pop((arm, obj), None)
+        self.observe(seen)
+        self.follow({arm: arm_state})
+
     def upright_turn(self, arm: str, arm_state: Any, shoulder: Any, swing_deg: float = 0.0) -> np.ndarray | None:
         """The world-frame turn of the hand that stands the object it holds up: its known top up, the hand level
         and facing away from the shoulder (an ordinary side grasp, which the arm reaches), swung `swing_deg`
