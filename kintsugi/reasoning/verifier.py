@@ -26,10 +26,15 @@ ANGULAR = frozenset({"upright", "tilted"})
 
 
 class _Seen:
-    __slots__ = ("centroid", "axis", "n_points", "extremes")
+    """One seen object as the checks read it: every feature the request gives (`extent` too: `within` reads a
+    container's footprint from it; without it a capsule in the tray was "unseen", and the re-planners
+    re-planned the put-inside until their action budget ran out on every coffee-tray trial)."""
+
+    __slots__ = ("centroid", "axis", "n_points", "extremes", "extent")
 
     def __init__(self, o: Any) -> None:
         self.centroid, self.axis, self.n_points, self.extremes = o.centroid, o.axis, o.n_points, o.extremes
+        self.extent = getattr(o, "extent", None)
         if self.axis is None and looks_upright(o):
             # No axis (a cube): upright by the composer's own rule, so a planned "upright" reads as met, as a
             # look at a cube held face down would; not "unseen", which failed DoReMi's every check on the block.
