@@ -216,9 +216,10 @@ class Conductor:
 
     def _already_open(self, arm: Any) -> bool:
         """The hand is commanded open (by an action of this conductor's, which waited for the fingers): opening
-        it again would only spend control steps (a recovery's release right after the settle, which has just opened that hand). Whether a pad
-        still touches something does not matter: an open hand lets go of what it can (a bottle that fell
-        upright against an open finger cost pour-single seed 3 a second opening, 9 steps more than rekep)."""
+        it again would only spend control steps (a recovery's release right after the settle, which has just
+        opened that hand). Whether a pad still touches something does not matter: an open hand lets go of what
+        it can (a bottle that fell upright against an open finger cost pour-single seed 3 a second opening, 9
+        steps more than rekep)."""
         if arm not in ARMS:
             return False
         return not self.robot.arm_state(arm).gripper_closed
@@ -388,10 +389,11 @@ class Conductor:
 
     def _set_down_caught(self, arm: str, seen: dict, edge: Edge) -> bool:
         """An object that came to rest in the open hand (both finger pads touch it, and it hangs clear of the
-        table) is closed on, turned top up when its top is known, and set down on the table, at the nearest spot clear of every other object; True if
-        one was. A bottle dropped while the hand was turned over to pour fell across the open fingers and stayed
-        there; the re-grasp's rise to its pose above carried it along and flung it out of reach (pour-dual seeds
-        86 and 88). Set down straight below, it lay where the other hand was lowering the cup."""
+        table) is closed on, turned top up when its top is known (its pose in the hand read again first), and set
+        down at the nearest spot clear of every other object; True if one was. A bottle dropped while the hand
+        was turned over to pour fell across the open fingers and stayed there; the re-grasp's rise to its pose
+        above carried it along and flung it out of reach (pour-dual seeds 86 and 88). Set down straight below,
+        it lay where the other hand was lowering the cup."""
         touching = self.robot.arm_state(arm).touching
         caught = [k for k in sorted(seen) if touching.get(k) == 2 and seen[k].centroid is not None
                   and seen[k].extremes and seen[k].extremes["bottom"][2] > CAUGHT_CLEAR_M]
