@@ -121,3 +121,17 @@ def test_a_baseline_keeps_the_robots_memory_of_tops_across_replans() -> None:
                             seed=43, overrides={"disturbance.drop_p": 0.1}))
     assert r.error is None
     assert any(e.kind == "replan" for e in r.events)
+
+
+def test_a_replan_keeps_a_goal_fact_an_operator_can_undo() -> None:
+    """Coffee-tray seed 0 at drop p 0.10: the tray falls from both hands at the end of the carry. `released(tray)`
+    held at the start; remembered as done, it was left out of the re-plan's goal, and the plan ended with both
+    hands still on the tray (a ground-truth failure the method called a success). Only facts no operator undoes
+    (a pour) are remembered now."""
+    from kintsugi.trial import TrialSpec, run_trial
+
+    r = run_trial(TrialSpec(task="coffee-tray", method="doremi", variant="default", condition="drop", seed=0,
+                            overrides={"disturbance.drop_p": 0.1}))
+    assert r.error is None, r.error
+    assert any(e.kind == "replan" for e in r.events)
+    assert r.success and r.framework_success and r.details["released"]

@@ -152,11 +152,15 @@ class Replanning:
         from kintsugi.methods.agentchord.domain import TABLETOP_DOMAIN
         from kintsugi.reasoning.taskgraph_types import parse_atom
 
+        # Only a fact no operator undoes stays done (poured): `released(tray)` held at the start, was remembered,
+        # and a re-plan after the tray fell from both hands left it out of the goal, so the plan ended with both
+        # hands still on the tray (DoReMi and code-as-monitor, coffee-tray seed 0).
         unobservable = {p.name for p in TABLETOP_DOMAIN.predicates if not p.constraints}
+        undone = {parse_atom(d)[1] for op in TABLETOP_DOMAIN.operators for d in op.delete}
         facts = set(self.node_facts.get(node, []))
         for g in self.ctx.task.goal:
             positive, name, args = parse_atom(g)
-            if positive and name in unobservable and f"{name}({', '.join(args)})" in facts:
+            if positive and name in unobservable and name not in undone and f"{name}({', '.join(args)})" in facts:
                 self.done.add(g)
 
     def _verify(self, graph: TaskGraph, node_id: str) -> bool:
