@@ -400,12 +400,7 @@ class Conductor:
         if not caught:
             return False
         obj = caught[0]
-        f = seen[obj]
-        tcp = np.asarray(self.robot.arm_state(arm).tcp_pos)
-        along = (float((tcp - np.asarray(f.centroid)) @ np.asarray(f.axis)) / max(f.extent[0] / 2.0, 1e-6)
-                 if f.axis is not None and f.extent else float("nan"))
-        self.log.event(self.robot.sim_time, "caught", f"{obj} rests in the open {arm} hand ({along:+.2f} of its "
-                       "half length from its centre): set it down")
+        self.log.event(self.robot.sim_time, "caught", f"{obj} rests in the open {arm} hand: set it down")
         self._execute(edge, "close_gripper", {"arm": arm})
         self.tops.regrip(arm, obj, self.robot.features({obj}), self.robot.arm_state(arm))
         turn = self.synthesis.upright_call({"action": "rotate_eef", "arm": arm, "angle_deg": 0.0, "axis": "closing"})

@@ -15,6 +15,7 @@ history it verified is kept (a pour already done is not visible otherwise).
 
 from __future__ import annotations
 
+import functools
 from typing import Any, Literal
 
 from kintsugi.errors import ConfigError
@@ -149,18 +150,13 @@ class Replanning:
         m.fired_at = fired_at
 
     def _remember(self, node: str) -> None:
-        from kintsugi.methods.agentchord.domain import TABLETOP_DOMAIN
         from kintsugi.reasoning.taskgraph_types import parse_atom
 
-        # Only a fact no operator undoes stays done (poured): `released(tray)` held at the start, was remembered,
-        # and a re-plan after the tray fell from both hands left it out of the goal, so the plan ended with both
-        # hands still on the tray (DoReMi and code-as-monitor, coffee-tray seed 0).
-        unobservable = {p.name for p in TABLETOP_DOMAIN.predicates if not p.constraints}
-        undone = {parse_atom(d)[1] for op in TABLETOP_DOMAIN.operators for d in op.delete}
+        lasting = _lasting_unseen()
         facts = set(self.node_facts.get(node, []))
         for g in self.ctx.task.goal:
             positive, name, args = parse_atom(g)
-            if positive and name in unobservable and name not in undone and f"{name}({', '.join(args)})" in facts:
+            if positive and name in lasting and f"{name}({', '.join(args)})" in facts:
                 self.done.add(g)
 
     def _verify(self, graph: TaskGraph, node_id: str) -> bool:
@@ -203,3 +199,17 @@ METHODS.register("doremi", "the reasoner verifies the held objects' conditions a
                  "every sub-goal, re-plans on a failure", tags=("system-b",))(_factory("doremi"))
 METHODS.register("code-as-monitor", "the arranger's monitors compiled once (detect only); the reasoner verifies "
                  "every sub-goal and re-plans on a firing or a failed check", tags=("system-b",))(_factory("code-as-monitor"))
+
+
+@functools.cache
+def _lasting_unseen() -> frozenset[str]:
+    """Predicates no constraint checks and no operator undoes (poured): once a verified node had them, they stay
+    done across re-plans. `released` is undone by a grasp: remembered because it held at the start, it was left
+    out of the goal of a re-plan after the tray fell from both hands, and the plan ended with both hands still
+    on the tray (DoReMi and code-as-monitor, coffee-tray seed 0)."""
+    from kintsugi.methods.agentchord.domain import TABLETOP_DOMAIN
+    from kintsugi.reasoning.taskgraph_types import parse_atom
+
+    undone = {parse_atom(d)[1] for op in TABLETOP_DOMAIN.operators for d in op.delete}
+    return frozenset(p.name for p in TABLETOP_DOMAIN.predicates if not p.constraints and p.name not in undone)
+
