@@ -17,6 +17,7 @@ from kintsugi.reasoning.taskgraph_types import Domain, OperatorSpec, parse_atom
 
 Atom = tuple[str, ...]
 State = frozenset[Atom]
+INF = float("inf")
 MAX_EXPANSIONS = 50_000
 """A search that expands more states than this gives up (a domain too loose for the embedded planner)."""
 
@@ -200,10 +201,18 @@ def _search(initial: State, goals: list[Goal], ops: list[GroundOp], max_expansio
             always.append(i)
     keys = list(filed.items())
     targets = [(mask(g[0]), mask(g[1])) for g in goals]
-    bounds = [_literal_bounds(g, ops, bit) for g in goals]
+    bounds = [_levels(_literal_bounds(g, ops, bit)) for g in goals]
 
     def h(m: int) -> float:
-        return min((_bound(m, bounds[i]) for i in waiting), default=0.0)
+        least = INF
+        for i in waiting:
+            for cost, pos, neg in bounds[i]:
+                if m & pos != pos or m & neg:
+                    break
+            else:
+                return 0.0
+            least = min(least, cost)
+        return least if waiting else 0.0
 
     start = mask(initial)
     counter = itertools.count()
@@ -259,14 +268,17 @@ def _literal_bounds(goal: Goal, ops: list[GroundOp], bit: dict[Atom, int]) -> li
     return sorted(out, key=lambda x: -x[0])
 
 
-def _bound(m: int, literals: list[tuple[float, int, bool]]) -> float:
-    """A lower bound on the cost from state `m` to the goal (A*'s heuristic, admissible so plans stay
-    cheapest): every literal it still lacks needs a step of its own, so the dearest of those steps at least
-    (the first unmet literal, dearest first); infinite when no step makes one of them true."""
+def _levels(literals: list[tuple[float, int, bool]]) -> list[tuple[float, int, int]]:
+    """A* heuristic's table: the literals of one cost merged into two masks (must be present, must be absent),
+    dearest first. A lower bound on the cost from a state to the goal (admissible, so plans stay cheapest) is the
+    cost of the first level with a literal the state lacks: every such literal needs a step of its own, so the
+    dearest of those steps at least; infinite when no step makes one of them true. Tested a level at a time, not
+    a literal at a time (a fifth of a compile went there; the bound, and so every plan, is the same)."""
+    levels: dict[float, list[int]] = {}
     for cost, b, present in literals:
-        if bool(m & b) != present:
-            return cost
-    return 0.0
+        level = levels.setdefault(cost, [0, 0])
+        level[0 if present else 1] |= b
+    return [(cost, pos, neg) for cost, (pos, neg) in sorted(levels.items(), key=lambda kv: -kv[0])]
 
 
 def relevant(ops: list[GroundOp], goal: tuple[frozenset[Atom], frozenset[Atom]]) -> list[GroundOp]:
