@@ -311,8 +311,7 @@ class Conductor:
             again = self._run_watched(edge)
             if again is not None:
                 self.log.event(self.robot.sim_time, "recovery disturbed", f"{edge.id}: {again}; run it again")
-                self._settle(failed, edge, firing)
-                return None
+                return None  # the run again settles first (settling here too waited out three more reads)
             if g.node(edge.target).kind == "nominal":
                 return edge.target
             arm, objs = firing_arm(failed, firing), _guard_objects(g, edge.target)
