@@ -133,6 +133,8 @@ class Conductor:
                                        heads if heads is not None else Heads())
         self.tops, self.heads = self.synthesis.tops, self.synthesis.heads
         self.arms = {a.args.get("arm") for e in graph.edges for a in e.actions if isinstance(a.args.get("arm"), str)}
+        self._rested: tuple[int, frozenset[str]] | None = None
+        """(control step, objects) of the last read that found those objects at rest."""
 
     # --- running ------------------------------------------------------------------
     def run(self) -> bool:
@@ -354,7 +356,7 @@ class Conductor:
         may still hold its own object (opening it dropped a fork while the spoon was recovered)."""
         arm = firing_arm(failed, firing)
         if arm is not None:
-            self.wait_still(arm, _objects_of(failed), recovery)
+            self.wait_still(arm, _objects_of(failed) | self._goal_objects(), recovery)
 
     def wait_still(self, arm: str, objs: set[str], edge: Edge) -> bool:
         """True once the objects are at rest; False if they still move after SETTLE_TRIES reads."""
@@ -382,6 +384,8 @@ class Conductor:
                 if set_downs < MAX_SET_DOWNS and self._set_down_caught(arm, now, edge):
                     set_downs, prev, still = set_downs + 1, None, 0
                     continue
+                if hasattr(self.robot, "control_steps"):
+                    self._rested = (self.robot_steps(), frozenset(objs))
                 return True
             prev = (pts, axes)
         return False
@@ -470,11 +474,22 @@ class Conductor:
         """The feature vector the checks read: perceived objects plus the top this conductor tracks for each."""
         return features(self.robot, objs, tops=self.tops.world)
 
+    def _goal_objects(self) -> set[str]:
+        """The objects the goal check reads: a settle waits for them too (the dropped object may have knocked
+        one), so a recovery that merges straight into the goal need not wait again."""
+        return {e for c in self.graph.node(self.graph.goal).constraints for e, role, _ in c.refs() if role != "arm"}
+
+    def _still_at_rest(self, names: set[str]) -> bool:
+        """The objects were read at rest and nothing has moved since (no control step): a recovery that let a
+        dropped bottle come to rest and merged straight into the goal waited for it a second time, three reads
+        (24 control steps) more than a re-planner that found the goal already held (pour-single seed 41)."""
+        return self._rested is not None and self._rested[0] == self.robot_steps() and names <= self._rested[1]
+
     def goal_holds(self) -> bool:
         goal = self.graph.node(self.graph.goal)
-        names = {e for c in goal.constraints for e, role, _ in c.refs() if role != "arm"}
+        names = self._goal_objects()
         idle = [a for a, state in goal.gripper.items() if state == "open"]
-        if idle:  # judge the scene once it is at rest (a placed object may still rock)
+        if idle and not self._still_at_rest(names):  # judge the scene at rest (a placed object may still rock)
             last = next(e for e in self.graph.edges if e.target == goal.id and e.kind == "nominal")
             if not self.wait_still(idle[0], names, last):
                 self.log.event(self.robot.sim_time, "goal check", f"{', '.join(sorted(names))} still moving after "
