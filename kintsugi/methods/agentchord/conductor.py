@@ -329,9 +329,10 @@ class Conductor:
 
     def _run_watched(self, edge: Edge) -> str | None:
         """One recovery edge under `LossWatch`, then its target's constraints; what went wrong, or None."""
-        from kintsugi.methods.agentchord.recovery_watch import LossWatch, unmet, watched
+        from kintsugi.methods.agentchord.recovery_watch import LossWatch, held_by_plan, unmet, watched
 
-        watch, observers = LossWatch(self.robot), getattr(self.robot, "step_observers", None)
+        watch = LossWatch(self.robot, held_by_plan(self.graph, edge))
+        observers = getattr(self.robot, "step_observers", None)
         if observers is not None:
             observers.append(watch)
         try:

@@ -14,7 +14,7 @@ from __future__ import annotations
 from typing import Any
 
 from kintsugi.methods.agentchord.observe import ARMS
-from kintsugi.taskgraph.model import Node
+from kintsugi.taskgraph.model import Edge, Node, TaskGraph
 
 LOSS_WINDOW = 3
 """Control steps the loss must persist (Eq. 12's W, as for the nominal drop monitors)."""
@@ -23,8 +23,10 @@ LOSS_WINDOW = 3
 class LossWatch:
     """A per-control-step observer: True (interrupt) once a held object has been lost for LOSS_WINDOW steps."""
 
-    def __init__(self, robot: Any) -> None:
+    def __init__(self, robot: Any, objects: set[str] | None = None) -> None:
         self.robot = robot
+        self.objects = objects
+        """Only these are watched (None: any object both pads hold); see `held_by_plan`."""
         self.held: dict[str, set[str]] = {a: set() for a in ARMS}
         self.count = 0
         self.lost: str | None = None
@@ -40,7 +42,7 @@ class LossWatch:
                 self.held[arm] = set()
                 continue
             missing += [f"{arm} lost {o}" for o in sorted(self.held[arm] - sense.touching)]
-            self.held[arm] |= sense.touching
+            self.held[arm] |= sense.touching if self.objects is None else sense.touching & self.objects
         self.count = self.count + 1 if missing else 0
         if self.count >= LOSS_WINDOW:
             self.lost, self.at = ", ".join(missing), step.index
@@ -54,6 +56,19 @@ class LossWatch:
             if not self.robot.grip_sense(arm).touching:
                 self.lost, self.at = f"{arm} grasp closed on nothing", int(getattr(self.robot, "control_steps", 0))
         return self.lost
+
+
+def held_by_plan(graph: TaskGraph, edge: Edge) -> set[str]:
+    """The objects a recovery edge means a hand to hold: those its actions name, and those its source or target
+    sub-goal says a hand touches. Only these are watched for a loss: a hand closing on a capsule that stands in
+    the tray pinches the tray's wall too, and lifting the capsule out of that pinch is no drop (coffee-tray seed
+    70 ran its recovery again and again for the tray's "loss", and gave up after ten)."""
+    calls = [a.args for a in edge.actions]
+    calls += [v for a in edge.actions if a.name == "drive" for v in a.args.values() if isinstance(v, dict)]
+    names = {c["obj"] for c in calls if isinstance(c.get("obj"), str)}
+    for n in (edge.source, edge.target):
+        names |= {c.object for c in graph.node(n).constraints if c.kind == "touching" and c.expect}
+    return names
 
 
 def watched(node: Node) -> set[str]:
