@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from kintsugi.methods.agentchord.method import metrics_of
-from kintsugi.methods.agentchord.recovery_watch import LOSS_WINDOW, LossWatch, held_by_plan
+from kintsugi.methods.agentchord.recovery_watch import LOSS_WINDOW, LossWatch, held_in_failure, named
 from kintsugi.taskgraph.model import TaskGraph
 from kintsugi.trial import TrialSpec, run_trial
 
@@ -62,17 +62,32 @@ def test_the_planned_object_lost_for_the_window_is_a_loss() -> None:
     assert not _run(LossWatch(robot, {"capsule"}), robot, 10)  # shorter than the window: no loss
 
 
-def test_held_by_plan_reads_the_actions_and_the_sub_goals() -> None:
+def test_what_a_recovery_holds_is_read_from_the_failed_check_and_its_actions() -> None:
     g = TaskGraph.model_validate({
-        "task": "t", "start": "a", "goal": "c",
-        "nodes": [{"id": "a"}, {"id": "b", "constraints": [{"kind": "touching", "arm": "left", "object": "capsule"}]},
-                  {"id": "c"}],
-        "edges": [{"id": "grasp", "source": "a", "target": "b",
-                   "actions": [{"name": "grasp", "args": {"arm": "left", "obj": "capsule"}}]},
-                  {"id": "lift", "source": "b", "target": "c",
-                   "actions": [{"name": "move_by_offset", "args": {"arm": "left", "dxyz": [0, 0, 0.1]}}]}]})
-    assert held_by_plan(g, g.edge("grasp")) == {"capsule"}
-    assert held_by_plan(g, g.edge("lift")) == {"capsule"}
+        "task": "t", "start": "a", "goal": "b",
+        "nodes": [{"id": "a"}, {"id": "b"}],
+        "edges": [{"id": "put", "source": "a", "target": "b",
+                   "actions": [{"name": "place", "args": {"arm": "left", "x": 0.4, "y": 0.0}}],
+                   "monitors": [{"id": "m", "failure_mode": "drop", "check": {"kind": "touching", "arm": "left",
+                                                                               "object": "capsule"}}]},
+                  {"id": "take", "source": "a", "target": "b",
+                   "actions": [{"name": "drive", "args": {"left": {"action": "grasp", "arm": "left", "obj": "tray"},
+                                                          "right": {"action": "grasp", "arm": "right",
+                                                                    "obj": "tray"}}}]}]})
+    assert held_in_failure(g.edge("put")) == {"capsule"}
+    assert named(g.edge("put")) == set()
+    assert named(g.edge("take")) == {"tray"}
+
+
+def test_pour_single_seed_40_a_drop_during_the_recovery_is_seen() -> None:
+    """The bottle is dropped again while the recovery tilts it to pour: no action of that edge names it, and
+    the sub-goal before it does not say it is held, but the failed edge's drop check watched it."""
+    r = run_trial(TrialSpec(task="pour-single", method="agentchord", variant="default", condition="drop", seed=40,
+                            overrides={"disturbance.drop_p": 0.1}))
+    assert r.error is None, r.error
+    assert r.success and r.framework_success
+    assert any(e.kind == "recovery disturbed" and "right lost bottle" in e.detail for e in r.events)
+    assert metrics_of(r).episode_steps < 3000
 
 
 def test_coffee_tray_seed_70_recovers_the_capsule_from_the_tray() -> None:

@@ -306,11 +306,19 @@ class Conductor:
         """The recovery chain from the failure context to its merge node; returns the merge node, or None when
         the recovery itself was disturbed (a held object dropped, a grasp closed on nothing): the caller runs
         the same recovery again, since the failure context and its predicted state are the same."""
+        from kintsugi.methods.agentchord.recovery_watch import held_in_failure, named
+
         g = self.graph
         edge = g.edge(firing.recovery)
         self._settle(failed, edge, firing)
+        # Watched for a loss: what the failure context held and what the recovery has taken hold of so far. Not
+        # whatever else the pads touch: a hand closing on a capsule that stands in the tray pinches the tray's
+        # wall too, and lifting the capsule out of that pinch is no drop (coffee-tray seed 70 ran its recovery
+        # again for the tray's "loss" ten times, and gave up).
+        held = held_in_failure(failed)
         while True:
-            again = self._run_watched(edge)
+            held |= named(edge)
+            again = self._run_watched(edge, held)
             if again is not None:
                 self.log.event(self.robot.sim_time, "recovery disturbed", f"{edge.id}: {again}; run it again")
                 return None  # the run again settles first (settling here too waited out three more reads)
@@ -327,11 +335,12 @@ class Conductor:
                                f"taking the cheapest, {nxt.id!r}")
             edge = nxt
 
-    def _run_watched(self, edge: Edge) -> str | None:
-        """One recovery edge under `LossWatch`, then its target's constraints; what went wrong, or None."""
-        from kintsugi.methods.agentchord.recovery_watch import LossWatch, held_by_plan, unmet, watched
+    def _run_watched(self, edge: Edge, held: set[str]) -> str | None:
+        """One recovery edge under `LossWatch` (a loss of what the recovery holds, `held`), then its target's
+        constraints; what went wrong, or None."""
+        from kintsugi.methods.agentchord.recovery_watch import LossWatch, unmet, watched
 
-        watch = LossWatch(self.robot, held_by_plan(self.graph, edge))
+        watch = LossWatch(self.robot, held)
         observers = getattr(self.robot, "step_observers", None)
         if observers is not None:
             observers.append(watch)

@@ -58,17 +58,16 @@ class LossWatch:
         return self.lost
 
 
-def held_by_plan(graph: TaskGraph, edge: Edge) -> set[str]:
-    """The objects a recovery edge means a hand to hold: those its actions name, and those its source or target
-    sub-goal says a hand touches. Only these are watched for a loss: a hand closing on a capsule that stands in
-    the tray pinches the tray's wall too, and lifting the capsule out of that pinch is no drop (coffee-tray seed
-    70 ran its recovery again and again for the tray's "loss", and gave up after ten)."""
+def held_in_failure(failed: Edge) -> set[str]:
+    """What the failed edge's drop checks watched in a hand."""
+    return {m.check.object for m in failed.monitors if m.check.kind == "touching"}
+
+
+def named(edge: Edge) -> set[str]:
+    """The objects the edge's actions name (a two-arm `drive` through its per-arm calls)."""
     calls = [a.args for a in edge.actions]
     calls += [v for a in edge.actions if a.name == "drive" for v in a.args.values() if isinstance(v, dict)]
-    names = {c["obj"] for c in calls if isinstance(c.get("obj"), str)}
-    for n in (edge.source, edge.target):
-        names |= {c.object for c in graph.node(n).constraints if c.kind == "touching" and c.expect}
-    return names
+    return {c["obj"] for c in calls if isinstance(c.get("obj"), str)}
 
 
 def watched(node: Node) -> set[str]:
