@@ -2,9 +2,9 @@
 
 A recovery can be disturbed too: at drop p = 0.10 per action, a four-action stand-up loses its object about
 a third of the time. Two checks, both from the robot's own senses:
-- `LossWatch`, every control step: an object both finger pads held during this edge is no longer touched
-  while the hand is still commanded closed (a drop; an opening the edge commands is no failure); and after a
-  grasp, a hand that closed on nothing;
+- `LossWatch`, every control step: an object the recovery means a hand to hold, which both finger pads held
+  during this edge, is no longer touched while the hand is still commanded closed (a drop; an opening the edge
+  commands is no failure); and after a grasp, a hand that closed on nothing;
 - `unmet`, after each recovery edge: its target sub-goal's constraints, read from the features.
 Either sends the conductor back to the same failure context, whose branch was planned from the same state.
 """
@@ -14,7 +14,7 @@ from __future__ import annotations
 from typing import Any
 
 from kintsugi.methods.agentchord.observe import ARMS
-from kintsugi.taskgraph.model import Edge, Node, TaskGraph
+from kintsugi.taskgraph.model import Edge, Node
 
 LOSS_WINDOW = 3
 """Control steps the loss must persist (Eq. 12's W, as for the nominal drop monitors)."""
@@ -26,7 +26,8 @@ class LossWatch:
     def __init__(self, robot: Any, objects: set[str] | None = None) -> None:
         self.robot = robot
         self.objects = objects
-        """Only these are watched (None: any object both pads hold); see `held_by_plan`."""
+        """Only these are watched (None: any object both pads hold): what the recovery means a hand to hold,
+        from `held_in_failure` and `named` (not a tray wall pinched beside the capsule a hand closed on)."""
         self.held: dict[str, set[str]] = {a: set() for a in ARMS}
         self.count = 0
         self.lost: str | None = None
