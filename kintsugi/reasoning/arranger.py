@@ -163,7 +163,7 @@ def _facts(texts: list[str], request: ArrangerRequest) -> State:
     return pos
 
 
-def _arm_calls(edge: Any) -> list[tuple[str, dict]]:
+def arm_calls(edge: Any) -> list[tuple[str, dict]]:
     """(action name, arguments) of the edge's per-arm calls: a dual `drive` counts as its two arm actions (a
     two-arm grasp can miss like a one-arm one)."""
     out = []
@@ -175,7 +175,7 @@ def _arm_calls(edge: Any) -> list[tuple[str, dict]]:
 
 
 def _candidates(mode: FailureMode, edge: Any, u: State, v: State | None = None) -> list[tuple[str, str]]:
-    calls = _arm_calls(edge)
+    calls = arm_calls(edge)
     kinds = {name for name, _ in calls}
     if not kinds & mode.actions:
         return []

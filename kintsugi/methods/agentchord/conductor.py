@@ -133,6 +133,9 @@ class Conductor:
                                        heads if heads is not None else Heads())
         self.tops, self.heads = self.synthesis.tops, self.synthesis.heads
         self.arms = {a.args.get("arm") for e in graph.edges for a in e.actions if isinstance(a.args.get("arm"), str)}
+        self.goal_objects = {e for c in graph.node(graph.goal).constraints for e, role, _ in c.refs() if role != "arm"}
+        """The objects the goal check reads: a settle waits for them too (the dropped object may have knocked one),
+        so a recovery that merges straight into the goal need not wait again."""
         self._rested: tuple[int, frozenset[str]] | None = None
         """(control step, objects) of the last read that found those objects at rest."""
 
@@ -366,7 +369,7 @@ class Conductor:
         may still hold its own object (opening it dropped a fork while the spoon was recovered)."""
         arm = firing_arm(failed, firing)
         if arm is not None:
-            self.wait_still(arm, _objects_of(failed) | self._goal_objects(), recovery)
+            self.wait_still(arm, _objects_of(failed) | self.goal_objects, recovery)
 
     def wait_still(self, arm: str, objs: set[str], edge: Edge) -> bool:
         """True once the objects are at rest; False if they still move after SETTLE_TRIES reads."""
@@ -484,11 +487,6 @@ class Conductor:
         """The feature vector the checks read: perceived objects plus the top this conductor tracks for each."""
         return features(self.robot, objs, tops=self.tops.world)
 
-    def _goal_objects(self) -> set[str]:
-        """The objects the goal check reads: a settle waits for them too (the dropped object may have knocked
-        one), so a recovery that merges straight into the goal need not wait again."""
-        return {e for c in self.graph.node(self.graph.goal).constraints for e, role, _ in c.refs() if role != "arm"}
-
     def _still_at_rest(self, names: set[str]) -> bool:
         """The objects were read at rest and nothing has moved since (no control step): a recovery that let a
         dropped bottle come to rest and merged straight into the goal waited for it a second time, three reads
@@ -497,7 +495,7 @@ class Conductor:
 
     def goal_holds(self) -> bool:
         goal = self.graph.node(self.graph.goal)
-        names = self._goal_objects()
+        names = self.goal_objects
         idle = [a for a, state in goal.gripper.items() if state == "open"]
         if idle and not self._still_at_rest(names):  # judge the scene at rest (a placed object may still rock)
             last = next(e for e in self.graph.edges if e.target == goal.id and e.kind == "nominal")

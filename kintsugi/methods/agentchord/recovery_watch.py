@@ -14,6 +14,7 @@ from __future__ import annotations
 from typing import Any
 
 from kintsugi.methods.agentchord.observe import ARMS
+from kintsugi.reasoning.arranger import arm_calls
 from kintsugi.taskgraph.model import Edge, Node
 
 LOSS_WINDOW = 3
@@ -66,9 +67,7 @@ def held_in_failure(failed: Edge) -> set[str]:
 
 def named(edge: Edge) -> set[str]:
     """The objects the edge's actions name (a two-arm `drive` through its per-arm calls)."""
-    calls = [a.args for a in edge.actions]
-    calls += [v for a in edge.actions if a.name == "drive" for v in a.args.values() if isinstance(v, dict)]
-    return {c["obj"] for c in calls if isinstance(c.get("obj"), str)}
+    return {args["obj"] for _, args in arm_calls(edge) if isinstance(args.get("obj"), str)}
 
 
 def watched(node: Node) -> set[str]:

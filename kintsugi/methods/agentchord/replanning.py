@@ -212,4 +212,3 @@ def _lasting_unseen() -> frozenset[str]:
 
     undone = {parse_atom(d)[1] for op in TABLETOP_DOMAIN.operators for d in op.delete}
     return frozenset(p.name for p in TABLETOP_DOMAIN.predicates if not p.constraints and p.name not in undone)
-
