@@ -82,7 +82,8 @@ class AgentChord:
             log.event(robot.sim_time, "compiled", f"{len(g.nodes)} nodes, {len(g.edges)} edges, "
                       f"{len(g.monitors())} monitors, {len(compiled.result.kept)} recovery branches kept "
                       f"({len(compiled.result.rejected)} dropped by Eq. 8)")
-            conductor = Conductor(g, robot, keyframes, log, steps_per_tick, compiled_kf, self.config)
+            conductor = Conductor(g, robot, keyframes, log, steps_per_tick, compiled_kf, self.config,
+                                  seen=first.objects)
             conductor.tops.observe(first.objects)
             conductor.heads.seed(first.objects)
             try:

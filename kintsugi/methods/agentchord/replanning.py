@@ -79,7 +79,7 @@ class Replanning:
                     self.paths.setdefault(proposal.edge, []).append(proposal)
                 conductor = Conductor(graph, robot, keyframes, log, steps_per_tick,
                                       config=ConductorConfig(on_failure="backtrack", max_recoveries=0),
-                                      metrics=metrics, tops=self.tops, heads=self.heads)
+                                      metrics=metrics, tops=self.tops, heads=self.heads, seen=self.seen)
                 conductor.after_action = self._after_action(graph) if self.style == "doremi" else None
                 ok, failed = self._conduct(conductor, graph)
                 if not failed:
@@ -102,6 +102,7 @@ class Replanning:
         """A re-plan sees the current observation and remembers the first (a model that planned the task saw
         it): its static facts, e.g. that a bottle now lying stands, so standing it up is a plan."""
         obs = self.robot.observation(images=self.images)
+        self.seen = obs.objects
         if first:
             self.first_obs = obs
             self.tops.observe(obs.objects)
