@@ -46,7 +46,8 @@ class _Robot:
     seen: list[str] = field(default_factory=list)
 
     def features(self, names=None):  # noqa: ANN001, ANN201 - the robot's perception interface
-        out = {"bottle": _Feat((*self.bottle, 0.1), (0.06, 0.06, 0.2)), "cup": _Feat((*self.cup, 0.045), (0.09, 0.09, 0.09))}
+        out = {"bottle": _Feat((*self.bottle, 0.1), (0.06, 0.06, 0.2)),
+               "cup": _Feat((*self.cup, 0.045), (0.09, 0.09, 0.09))}
         return {k: v for k, v in out.items() if names is None or k in names}
 
     def arm_state(self, arm: str) -> _Arm:
@@ -57,9 +58,9 @@ class _Robot:
 
 
 def _synthesis(robot: _Robot) -> EdgeSynthesis:
+    place = {"name": "place", "args": {"arm": "right", "x": FIRST[0], "y": FIRST[1]}}
     g = TaskGraph.model_validate({"task": "t", "start": "a", "goal": "b", "nodes": [{"id": "a"}, {"id": "b"}],
-                                  "edges": [{"id": "e", "source": "a", "target": "b",
-                                             "actions": [{"name": "place", "args": {"arm": "right", "x": FIRST[0], "y": FIRST[1]}}]}]})
+                                  "edges": [{"id": "e", "source": "a", "target": "b", "actions": [place]}]})
     return EdgeSynthesis(g, robot, keyframes=None, tops=Tops(), heads=Heads(), seen={"bottle": FIRST})
 
 

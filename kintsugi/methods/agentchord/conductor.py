@@ -117,7 +117,10 @@ class Conductor:
     def __init__(self, graph: TaskGraph, robot: Any, keyframes: TabletopKeyframes, log: TrialLog,
                  steps_per_tick: int, compiled_keyframes: dict[str, np.ndarray] | None = None,
                  config: ConductorConfig = ConductorConfig(), metrics: Metrics | None = None,
-                 tops: Tops | None = None, heads: Heads | None = None, seen: dict[str, ObjectFeatures] | None = None) -> None:
+                 tops: Tops | None = None, heads: Heads | None = None,
+                 seen: dict[str, ObjectFeatures] | None = None) -> None:
+        """`seen`: the objects of the observation the graph's action arguments were filled from (a place back
+        where an object was first seen is re-aimed against it)."""
         self.graph = graph
         self.robot = robot
         self.keyframes = keyframes
@@ -133,7 +136,6 @@ class Conductor:
                                        heads if heads is not None else Heads(),
                                        {k: (f.centroid[0], f.centroid[1]) for k, f in (seen or {}).items()
                                         if f.centroid is not None})
-        """`seen`: the objects of the observation the graph's action arguments were filled from."""
         self.tops, self.heads = self.synthesis.tops, self.synthesis.heads
         self.arms = {a.args.get("arm") for e in graph.edges for a in e.actions if isinstance(a.args.get("arm"), str)}
         self.goal_objects = {e for c in graph.node(graph.goal).constraints for e, role, _ in c.refs() if role != "arm"}
