@@ -10,7 +10,6 @@ from __future__ import annotations
 import heapq
 import itertools
 from dataclasses import dataclass
-from typing import Iterable
 
 from kintsugi.errors import ReasoningError
 from kintsugi.reasoning.taskgraph_types import Domain, OperatorSpec, parse_atom
@@ -178,8 +177,8 @@ def _search(initial: State, goals: list[Goal], ops: list[GroundOp], max_expansio
                              *(g[0] | g[1] for g in goals)):
         bit.setdefault(a, 1 << len(bit))
 
-    def mask(atoms: Iterable[Atom]) -> int:
-        return sum(bit[a] for a in set(atoms))
+    def mask(atoms: frozenset[Atom] | set[Atom]) -> int:
+        return sum(bit[a] for a in atoms)
 
     by_predicate: dict[str, list[Atom]] = {}
     for a in bit:
@@ -258,10 +257,14 @@ def _search(initial: State, goals: list[Goal], ops: list[GroundOp], max_expansio
 
 def _literal_bounds(goal: Goal, ops: list[GroundOp], bit: dict[Atom, int]) -> list[tuple[float, int, bool]]:
     """Per goal literal, the cheapest single step that makes it true (adds a needed atom, deletes a forbidden
-    one; infinite when none does), as (cost, the atom's bit, whether it must be present), dearest first."""
-    out = []
-    for a in goal[0]:
-        out.append((min((op.cost for op in ops if a in op.add), default=float("inf")), bit[a], True))
+    one; infinite when none does), as (cost, the atom's bit, whether it must be present), dearest first. The
+    cheapest adder of every atom is read off in one pass over the operators, not one pass per literal."""
+    cheapest: dict[Atom, float] = {}
+    for op in ops:
+        for a in op.add:
+            if op.cost < cheapest.get(a, INF):
+                cheapest[a] = op.cost
+    out = [(cheapest.get(a, INF), bit[a], True) for a in goal[0]]
     for a in goal[1]:
         out.append((min((op.cost for op in ops if a in op.delete or op.wild_deletes(a)),
                         default=float("inf")), bit[a], False))
