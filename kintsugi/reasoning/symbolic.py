@@ -200,7 +200,12 @@ def _search(initial: State, goals: list[Goal], ops: list[GroundOp], max_expansio
             always.append(i)
     keys = list(filed.items())
     targets = [(mask(g[0]), mask(g[1])) for g in goals]
-    bounds = [_levels(_literal_bounds(g, ops, bit)) for g in goals]
+    cheapest: dict[Atom, float] = {}  # each atom's cheapest adder, one pass over the operators for every goal
+    for op in ops:
+        for a in op.add:
+            if op.cost < cheapest.get(a, INF):
+                cheapest[a] = op.cost
+    bounds = [_levels(_literal_bounds(g, ops, bit, cheapest)) for g in goals]
 
     def h(m: int) -> float:
         least = INF
@@ -255,19 +260,14 @@ def _search(initial: State, goals: list[Goal], ops: list[GroundOp], max_expansio
     return found, False
 
 
-def _literal_bounds(goal: Goal, ops: list[GroundOp], bit: dict[Atom, int]) -> list[tuple[float, int, bool]]:
+def _literal_bounds(goal: Goal, ops: list[GroundOp], bit: dict[Atom, int], cheapest: dict[Atom, float]
+                    ) -> list[tuple[float, int, bool]]:
     """Per goal literal, the cheapest single step that makes it true (adds a needed atom, deletes a forbidden
-    one; infinite when none does), as (cost, the atom's bit, whether it must be present), dearest first. The
-    cheapest adder of every atom is read off in one pass over the operators, not one pass per literal."""
-    cheapest: dict[Atom, float] = {}
-    for op in ops:
-        for a in op.add:
-            if op.cost < cheapest.get(a, INF):
-                cheapest[a] = op.cost
+    one; infinite when none does), as (cost, the atom's bit, whether it must be present), dearest first.
+    `cheapest`: each atom's cheapest adder among `ops`."""
     out = [(cheapest.get(a, INF), bit[a], True) for a in goal[0]]
     for a in goal[1]:
-        out.append((min((op.cost for op in ops if a in op.delete or op.wild_deletes(a)),
-                        default=float("inf")), bit[a], False))
+        out.append((min((op.cost for op in ops if a in op.delete or op.wild_deletes(a)), default=INF), bit[a], False))
     return sorted(out, key=lambda x: -x[0])
 
 
