@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from kintsugi.reasoning.symbolic import PlanningError, ground, parse_literals, plan, plan_each, satisfies
+from kintsugi.reasoning.symbolic import OpTable, PlanningError, ground, parse_literals, plan, plan_each, satisfies
 from kintsugi.reasoning.taskgraph_types import Domain, OperatorSpec, PredicateSpec
 
 PREDS = ["p", "q", "r", "s"]
@@ -143,3 +143,35 @@ def test_one_search_for_many_goals_gives_each_goal_its_own_plan(domain, initial,
             continue
         assert steps is not None
         assert sum(op.cost for op in steps) == pytest.approx(sum(op.cost for op in alone))
+
+
+@settings(max_examples=60)
+@given(domain=domains(), cases=st.lists(st.tuples(states, st.lists(st.sampled_from(ATOMS), min_size=1, max_size=3)),
+                                        min_size=1, max_size=6))
+def test_one_table_for_many_searches_plans_as_fresh_lists_do(domain, cases) -> None:
+    """The arranger builds the operators' masks once and searches them many times: every plan is the one a
+    fresh list gives, so nothing a search adds (bits for atoms no operator names) leaks into the next."""
+    ops = ground(domain, [], OBJS)
+    table = OpTable(ops)
+    for initial, atoms in cases:
+        goal = parse_literals([f"{p}({o})" for p, o in atoms], domain)
+        try:
+            fresh = [op.label for op in plan(initial, goal, ops)]
+        except PlanningError as exc:
+            with pytest.raises(PlanningError, match=str(exc).split(";")[0]):
+                plan(initial, goal, table)
+            continue
+        assert [op.label for op in plan(initial, goal, table)] == fresh
+
+
+def test_a_wild_delete_removes_an_atom_only_the_state_names() -> None:
+    """`over(a, z)` with z no operator names: the table gives it a bit for that search, and a wild delete
+    `over(?x, _)` must still remove it, or a goal that forbids it is never met."""
+    domain = Domain(predicates=[PredicateSpec(name="over", params=["object", "object"]),
+                                PredicateSpec(name="free", params=["object"])],
+                    operators=[OperatorSpec(name="put", params={"?x": "object"}, pre=[], add=["free(?x)"],
+                                            delete=["over(?x, _)"], actions=[{"name": "wait"}], cost=1)])
+    table = OpTable(ground(domain, [], ["a", "b"]))
+    goal = parse_literals(["not over(a, z)"], domain)
+    for _ in range(2):  # the second search starts from the table again, not from the first one's bits
+        assert [op.label for op in plan(frozenset({("over", "a", "z")}), goal, table)] == ["put(a)"]

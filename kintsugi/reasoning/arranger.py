@@ -16,7 +16,7 @@ from typing import Any, Callable
 
 from kintsugi.reasoning.composer import arms_named, instructed_ops, node_constraints, place_table
 from kintsugi.reasoning.jsontext import BadReply
-from kintsugi.reasoning.symbolic import PlanningError, State, ground, parse_literals, plan, plan_each
+from kintsugi.reasoning.symbolic import OpTable, PlanningError, State, ground, parse_literals, plan, plan_each
 from kintsugi.reasoning.taskgraph_types import ArrangerReply, ArrangerRequest, SeenObject
 from kintsugi.taskgraph.augment import augment, parse_proposals
 from kintsugi.taskgraph.base import GraphError
@@ -372,7 +372,7 @@ def embedded_arrange(request: ArrangerRequest) -> ArrangerReply:
     names = [o.name for o in request.objects if o.visible]
     places = _places(request, [a.name for a in request.arms], [o.name for o in request.objects])
     where = place_table(places, request.domain, seen, dict(request.regions))
-    ops = instructed_ops(request.task, request.domain, arms, names, places)
+    ops = OpTable(instructed_ops(request.task, request.domain, arms, names, places))  # masks built once, not per search
     wanted = set(request.failure_modes)
     facts = {n.id: _facts(request.node_facts[n.id], request) for n in graph.nodes}
     ctg = cost_to_go(graph)

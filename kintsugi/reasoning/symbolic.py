@@ -1,6 +1,7 @@
 """A small STRIPS planner: typed operators grounded over the scene's arms and objects, cheapest plan by
-A* search (an admissible bound: the dearest single step a missing goal literal needs). The embedded composer plans the nominal graph with it and the embedded arranger plans
-each recovery branch (from the state a failure leaves to a merge node) with it.
+A* search (an admissible bound: the dearest single step a missing goal literal needs). The embedded composer
+plans the nominal graph with it and the embedded arranger plans each recovery branch (from the state a failure
+leaves to a merge node) with it, over one `OpTable` of the operators' bit masks for all its searches.
 
 States are frozensets of ground atoms `("holding", "right", "bottle")` under the closed-world assumption.
 """
@@ -9,6 +10,7 @@ from __future__ import annotations
 
 import heapq
 import itertools
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 from kintsugi.errors import ReasoningError
@@ -136,35 +138,118 @@ def satisfies(s: State, goal: tuple[frozenset[Atom], frozenset[Atom]]) -> bool:
 Goal = tuple[frozenset[Atom], frozenset[Atom]]
 
 
-def plan(initial: State, goal: Goal, ops: list[GroundOp], max_expansions: int = MAX_EXPANSIONS) -> list[GroundOp]:
+class OpTable:
+    """Ground operators compiled once into bit masks over every atom they name, for many searches over one
+    list: the arranger searches the same operators about thirty times per compile, and rebuilding these masks
+    in every search was a third of its time. Atoms a search meets that no operator names (in its initial state
+    or its goals) get bits of their own in that search (`_Masks.extended`)."""
+
+    def __init__(self, ops: list[GroundOp]) -> None:
+        self.ops = list(ops)
+        bit: dict[Atom, int] = {}
+        for a in itertools.chain(*(op.add for op in self.ops),
+                                 *(op.pre_pos | op.pre_neg | op.delete for op in self.ops)):
+            bit.setdefault(a, 1 << len(bit))
+        by_predicate: dict[str, list[Atom]] = {}
+        for a in bit:
+            by_predicate.setdefault(a[0], []).append(a)
+        self.masks = m = _Masks(bit, [], [], [], [], [])
+        for op in self.ops:
+            wiped = {a for p in op._wild_predicates for a in by_predicate.get(p, ())  # type: ignore[attr-defined]
+                     if op.wild_deletes(a)}
+            m.pre_pos.append(m.of(op.pre_pos))
+            m.pre_neg.append(m.of(op.pre_neg))
+            m.keep.append(~m.of((op.delete | wiped) - op.add))
+            m.add.append(m.of(op.add))
+            m.deletes.append(m.of(op.delete | wiped))
+        # Each operator filed under one of its positive preconditions (the one with the most arguments, the rarest
+        # true: holding(left, fork) rather than hand_empty(left)): a state tries only the operators filed under an
+        # atom it holds, in their order (so the plans, ties included, are those of trying all of them).
+        self.file_bit = [bit[max(sorted(op.pre_pos), key=len)] if op.pre_pos else 0 for op in self.ops]
+
+    def relevant(self, goal: Goal, m: "_Masks") -> list[int]:
+        """The indices of the operators that can matter for the goal, in their order: those that add an atom
+        the goal or a relevant operator needs true, or delete one they need false (backward, to a fixpoint).
+        Dropping the rest keeps every cheapest plan (with positive costs, a step that does neither only adds
+        cost) and shrinks the search: the arranger's plans for rearrange-table went from minutes to seconds."""
+        need_true, need_false = m.of(goal[0]), m.of(goal[1])
+        keep = [False] * len(self.ops)
+        changed = True
+        while changed:
+            changed = False
+            for i in range(len(self.ops)):
+                if not keep[i] and (m.add[i] & need_true or m.deletes[i] & need_false):
+                    keep[i] = changed = True
+                    need_true |= m.pre_pos[i]
+                    need_false |= m.pre_neg[i]
+        return [i for i, k in enumerate(keep) if k]
+
+
+@dataclass
+class _Masks:
+    """An `OpTable`'s atom bits and per-operator masks: preconditions, what applying keeps (`keep`, ANDed),
+    adds, and what it deletes (exact or by a wild pattern; for relevance)."""
+
+    bit: dict[Atom, int]
+    pre_pos: list[int]
+    pre_neg: list[int]
+    keep: list[int]
+    add: list[int]
+    deletes: list[int]
+
+    def of(self, atoms: Iterable[Atom]) -> int:
+        return sum(self.bit[a] for a in set(atoms))
+
+    def extended(self, atoms: Iterable[Atom], ops: list[GroundOp]) -> "_Masks":
+        """These masks with a bit for each atom no operator names (a wild delete may still remove it); self
+        when there is none."""
+        new = [a for a in dict.fromkeys(atoms) if a not in self.bit]
+        if not new:
+            return self
+        out = _Masks(dict(self.bit), self.pre_pos, self.pre_neg, list(self.keep), self.add, list(self.deletes))
+        for a in new:
+            b = out.bit[a] = 1 << len(out.bit)
+            for i, op in enumerate(ops):
+                if op.wild_deletes(a):
+                    out.deletes[i] |= b
+                    if a not in op.add:
+                        out.keep[i] &= ~b
+        return out
+
+
+def _table(ops: "list[GroundOp] | OpTable") -> OpTable:
+    return ops if isinstance(ops, OpTable) else OpTable(ops)
+
+
+def plan(initial: State, goal: Goal, ops: "list[GroundOp] | OpTable", max_expansions: int = MAX_EXPANSIONS
+         ) -> list[GroundOp]:
     """The cheapest operator sequence from `initial` to a state satisfying `goal` (A* search; ties broken by
-    insertion order, so the answer is deterministic)."""
-    ops = relevant(ops, goal)
-    (steps,), over_budget = _search(initial, [goal], ops, max_expansions)
+    insertion order, so the answer is deterministic). `ops`: a list, or an `OpTable` built once for many plans."""
+    table = _table(ops)
+    (steps,), over_budget = _search(initial, [goal], table, max_expansions)
     if steps is not None:
         return steps
     if over_budget:
         raise PlanningError(f"no plan within {max_expansions} expanded states; the domain is too loose "
                             "or the goal unreachable")
-    missing = ", ".join(sorted(atom_text(a) for a in goal[0] - _reachable_atoms(initial, ops))) or "(a combination)"
+    missing = ", ".join(sorted(atom_text(a) for a in goal[0] - _reachable_atoms(initial, relevant(table, goal))))
     raise PlanningError(f"the goal cannot be reached from the observed state with these actions; "
-                        f"never achievable: {missing}")
+                        f"never achievable: {missing or '(a combination)'}")
 
 
-def plan_each(initial: State, goals: list[Goal], ops: list[GroundOp], max_expansions: int = MAX_EXPANSIONS
-              ) -> list[list[GroundOp] | None]:
+def plan_each(initial: State, goals: list[Goal], ops: "list[GroundOp] | OpTable",
+              max_expansions: int = MAX_EXPANSIONS) -> list[list[GroundOp] | None]:
     """The cheapest plan to each goal (None: none found within the budget), from one search instead of one
     per goal: the arranger asks for every node after a failure at once (the same plans as `plan`, which
     the planner tests check)."""
-    need = (frozenset().union(*(g[0] for g in goals)), frozenset().union(*(g[1] for g in goals)))
-    return _search(initial, goals, relevant(ops, need), max_expansions * max(1, len(goals)))[0]
+    return _search(initial, goals, _table(ops), max_expansions * max(1, len(goals)))[0]
 
 
-def _search(initial: State, goals: list[Goal], ops: list[GroundOp], max_expansions: int
+def _search(initial: State, goals: list[Goal], table: OpTable, max_expansions: int
             ) -> tuple[list[list[GroundOp] | None], bool]:
-    """A* search until every goal is met (the first state popped that meets one ends the cheapest plan to it:
-    the bound is the least over the goals still waiting, so it never overestimates the cost to any of them);
-    (plans, whether the budget ran out).
+    """A* search over the operators relevant to the goals until every goal is met (the first state popped that
+    meets one ends the cheapest plan to it: the bound is the least over the goals still waiting, so it never
+    overestimates the cost to any of them); (plans, whether the budget ran out).
 
     States are searched as bit masks over every atom a state can hold (the initial state's and the
     operators' effects): applying an operator, testing its preconditions and a goal are then integer
@@ -172,66 +257,52 @@ def _search(initial: State, goals: list[Goal], ops: list[GroundOp], max_expansio
     state); the expansions, and so the plans, are the same."""
     found: list[list[GroundOp] | None] = [None] * len(goals)
     waiting = list(range(len(goals)))
-    bit: dict[Atom, int] = {}
-    for a in itertools.chain(initial, *(op.add for op in ops), *(op.pre_pos | op.pre_neg | op.delete for op in ops),
-                             *(g[0] | g[1] for g in goals)):
-        bit.setdefault(a, 1 << len(bit))
-
-    def mask(atoms: frozenset[Atom] | set[Atom]) -> int:
-        return sum(bit[a] for a in atoms)
-
-    by_predicate: dict[str, list[Atom]] = {}
-    for a in bit:
-        by_predicate.setdefault(a[0], []).append(a)
-    steps_of = []
-    for op in ops:
-        gone = set(op.delete) | {a for p in op._wild_predicates for a in by_predicate.get(p, ())  # type: ignore[attr-defined]
-                                 if op.wild_deletes(a)}
-        steps_of.append((mask(op.pre_pos), mask(op.pre_neg), ~mask(gone - op.add), mask(op.add), op.cost, op))
-    # Each operator filed under one of its positive preconditions (the one with the most arguments, the rarest
-    # true: holding(left, fork) rather than hand_empty(left)): a state tries only the operators filed under an
-    # atom it holds, in their order (so the plans, ties included, are those of trying all of them).
+    m = table.masks.extended(itertools.chain(initial, *(g[0] | g[1] for g in goals)), table.ops)
+    need = (frozenset().union(*(g[0] for g in goals)), frozenset().union(*(g[1] for g in goals)))
+    chosen = table.relevant(need, m)
+    ops = [table.ops[i] for i in chosen]
+    steps_of = [(m.pre_pos[i], m.pre_neg[i], m.keep[i], m.add[i], table.ops[i].cost, table.ops[i]) for i in chosen]
     filed: dict[int, list[int]] = {}
     always: list[int] = []
-    for i, op in enumerate(ops):
-        if op.pre_pos:
-            filed.setdefault(bit[max(sorted(op.pre_pos), key=len)], []).append(i)
+    for j, i in enumerate(chosen):
+        if table.file_bit[i]:
+            filed.setdefault(table.file_bit[i], []).append(j)
         else:
-            always.append(i)
+            always.append(j)
     keys = list(filed.items())
-    targets = [(mask(g[0]), mask(g[1])) for g in goals]
+    targets = [(m.of(g[0]), m.of(g[1])) for g in goals]
     cheapest: dict[Atom, float] = {}  # each atom's cheapest adder, one pass over the operators for every goal
     for op in ops:
         for a in op.add:
             if op.cost < cheapest.get(a, INF):
                 cheapest[a] = op.cost
-    bounds = [_levels(_literal_bounds(g, ops, bit, cheapest)) for g in goals]
+    bounds = [_levels(_literal_bounds(g, ops, m.bit, cheapest)) for g in goals]
 
-    def h(m: int) -> float:
+    def h(s: int) -> float:
         least = INF
         for i in waiting:
             for cost, pos, neg in bounds[i]:
-                if m & pos != pos or m & neg:
+                if s & pos != pos or s & neg:
                     break
             else:
                 return 0.0
             least = min(least, cost)
         return least if waiting else 0.0
 
-    start = mask(initial)
+    start = m.of(initial)
     counter = itertools.count()
     frontier: list[tuple[float, int, float, int]] = [(h(start), next(counter), 0.0, start)]
     best: dict[int, float] = {start: 0.0}
     parent: dict[int, tuple[int, GroundOp]] = {}
     expanded = 0
     while frontier:
-        _, _, cost, m = heapq.heappop(frontier)
-        if cost > best.get(m, float("inf")):
+        _, _, cost, s = heapq.heappop(frontier)
+        if cost > best.get(s, float("inf")):
             continue
-        met = [i for i in waiting if m & targets[i][0] == targets[i][0] and not m & targets[i][1]]
+        met = [i for i in waiting if s & targets[i][0] == targets[i][0] and not s & targets[i][1]]
         if met:
             steps: list[GroundOp] = []
-            t = m
+            t = s
             while t in parent:
                 t, op = parent[t]
                 steps.append(op)
@@ -243,17 +314,17 @@ def _search(initial: State, goals: list[Goal], ops: list[GroundOp], max_expansio
         expanded += 1
         if expanded > max_expansions:
             return found, True
-        tried = always + [i for k, idx in keys if m & k for i in idx]
+        tried = always + [i for k, idx in keys if s & k for i in idx]
         tried.sort()
         for i in tried:
             pos, neg, keep, add, op_cost, op = steps_of[i]
-            if m & pos != pos or m & neg:
+            if s & pos != pos or s & neg:
                 continue
-            t = (m & keep) | add
+            t = (s & keep) | add
             c = cost + op_cost
             if c < best.get(t, float("inf")):
                 best[t] = c
-                parent[t] = (m, op)
+                parent[t] = (s, op)
                 f = c + h(t)
                 if f < float("inf"):
                     heapq.heappush(frontier, (f, next(counter), c, t))
@@ -284,31 +355,11 @@ def _levels(literals: list[tuple[float, int, bool]]) -> list[tuple[float, int, i
     return [(cost, pos, neg) for cost, (pos, neg) in sorted(levels.items(), key=lambda kv: -kv[0])]
 
 
-def relevant(ops: list[GroundOp], goal: tuple[frozenset[Atom], frozenset[Atom]]) -> list[GroundOp]:
-    """The operators that can matter for the goal, in their order: those that add an atom the goal or a
-    relevant operator needs true, or delete one they need false (backward, to a fixpoint). Dropping the rest
-    keeps every cheapest plan (with positive costs, a step that does neither only adds cost) and shrinks the
-    search: the arranger's plans for rearrange-table went from minutes to seconds."""
-    need_true, need_false = set(goal[0]), set(goal[1])
-    false_by_predicate: dict[str, set[Atom]] = {}  # a wild delete can only match atoms of its own predicate
-    for a in need_false:
-        false_by_predicate.setdefault(a[0], set()).add(a)
-    keep = [False] * len(ops)
-    changed = True
-    while changed:
-        changed = False
-        for i, op in enumerate(ops):
-            if keep[i]:
-                continue
-            helps = (not op.add.isdisjoint(need_true) or not op.delete.isdisjoint(need_false)
-                     or any(op.wild_deletes(a) for w in op.wild for a in false_by_predicate.get(w[0], ())))
-            if helps:
-                keep[i] = changed = True
-                need_true |= op.pre_pos
-                need_false |= op.pre_neg
-                for a in op.pre_neg:
-                    false_by_predicate.setdefault(a[0], set()).add(a)
-    return [op for op, k in zip(ops, keep) if k]
+def relevant(ops: "list[GroundOp] | OpTable", goal: Goal) -> list[GroundOp]:
+    """The operators that can matter for the goal, in their order (`OpTable.relevant`)."""
+    table = _table(ops)
+    m = table.masks.extended(goal[0] | goal[1], table.ops)
+    return [table.ops[i] for i in table.relevant(goal, m)]
 
 
 def _reachable_atoms(initial: State, ops: list[GroundOp]) -> frozenset[Atom]:
