@@ -175,3 +175,29 @@ def test_a_wild_delete_removes_an_atom_only_the_state_names() -> None:
     goal = parse_literals(["not over(a, z)"], domain)
     for _ in range(2):  # the second search starts from the table again, not from the first one's bits
         assert [op.label for op in plan(frozenset({("over", "a", "z")}), goal, table)] == ["put(a)"]
+
+
+
+def test_the_bound_adds_literals_no_one_step_makes_together() -> None:
+    """mk_p(x) makes p(x) (3), mk_q(x) makes q(x) (2), mk_pq(x) makes both (5). p(a) and p(b) need two steps,
+    so the bound adds them (6); p(a) and q(a) could come from one mk_pq(a), so it counts only the dearer (3)."""
+    from kintsugi.reasoning.symbolic import _achiever_bounds, _bound
+
+    def op(name: str, add: list[str], cost: float) -> OperatorSpec:
+        return OperatorSpec(name=name, params={"?x": "object"}, add=add, actions=[{"name": "w"}], cost=cost)
+
+    domain = Domain(predicates=[PredicateSpec(name=p, params=["object"]) for p in ("p", "q")],
+                    operators=[op("mk_p", ["p(?x)"], 3), op("mk_q", ["q(?x)"], 2), op("mk_pq", ["p(?x)", "q(?x)"], 5)])
+    table = OpTable(ground(domain, [], ["a", "b"]))
+    every = (1 << len(table.ops)) - 1
+
+    def bound(goal: list[str], state: frozenset = frozenset()) -> float:
+        g = parse_literals(goal, domain)
+        m = table.masks.extended(state | g[0], table.ops)
+        return _bound(m.of(state), _achiever_bounds(g, table, m, every)[2])
+
+    assert bound(["p(a)", "p(b)"]) == 6
+    assert bound(["p(a)", "q(a)"]) == 3
+    assert bound(["p(a)", "q(a)", "p(b)", "q(b)"]) == 6
+    assert bound(["p(a)", "p(b)"], frozenset({("p", "a")})) == 3
+    assert plan(frozenset(), parse_literals(["p(a)", "q(a)"], domain), table)[0].label == "mk_pq(a)"

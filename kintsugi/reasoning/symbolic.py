@@ -166,6 +166,11 @@ class OpTable:
         # true: holding(left, fork) rather than hand_empty(left)): a state tries only the operators filed under an
         # atom it holds, in their order (so the plans, ties included, are those of trying all of them).
         self.file_bit = [bit[max(sorted(op.pre_pos), key=len)] if op.pre_pos else 0 for op in self.ops]
+        self.adders: dict[Atom, int] = {}
+        """atom -> the operators that add it, a bit per operator (by its index here)."""
+        for i, op in enumerate(self.ops):
+            for a in op.add:
+                self.adders[a] = self.adders.get(a, 0) | 1 << i
 
     def relevant(self, goal: Goal, m: "_Masks") -> list[int]:
         """The indices of the operators that can matter for the goal, in their order: those that add an atom
@@ -271,22 +276,16 @@ def _search(initial: State, goals: list[Goal], table: OpTable, max_expansions: i
             always.append(j)
     keys = list(filed.items())
     targets = [(m.of(g[0]), m.of(g[1])) for g in goals]
-    cheapest: dict[Atom, float] = {}  # each atom's cheapest adder, one pass over the operators for every goal
-    for op in ops:
-        for a in op.add:
-            if op.cost < cheapest.get(a, INF):
-                cheapest[a] = op.cost
-    bounds = [_levels(_literal_bounds(g, ops, m.bit, cheapest)) for g in goals]
+    searched = sum(1 << i for i in chosen)
+    bounds = [_achiever_bounds(g, table, m, searched) for g in goals]
 
     def h(s: int) -> float:
         least = INF
         for i in waiting:
-            for cost, pos, neg in bounds[i]:
-                if s & pos != pos or s & neg:
-                    break
-            else:
+            pos, neg, literals = bounds[i]
+            if s & pos == pos and not s & neg:
                 return 0.0
-            least = min(least, cost)
+            least = min(least, _bound(s, literals))
         return least if waiting else 0.0
 
     start = m.of(initial)
@@ -331,28 +330,43 @@ def _search(initial: State, goals: list[Goal], table: OpTable, max_expansions: i
     return found, False
 
 
-def _literal_bounds(goal: Goal, ops: list[GroundOp], bit: dict[Atom, int], cheapest: dict[Atom, float]
-                    ) -> list[tuple[float, int, bool]]:
-    """Per goal literal, the cheapest single step that makes it true (adds a needed atom, deletes a forbidden
-    one; infinite when none does), as (cost, the atom's bit, whether it must be present), dearest first.
-    `cheapest`: each atom's cheapest adder among `ops`."""
-    out = [(cheapest.get(a, INF), bit[a], True) for a in goal[0]]
-    for a in goal[1]:
-        out.append((min((op.cost for op in ops if a in op.delete or op.wild_deletes(a)), default=INF), bit[a], False))
-    return sorted(out, key=lambda x: -x[0])
+def _achiever_bounds(goal: Goal, table: OpTable, m: _Masks, searched: int
+                     ) -> tuple[int, int, list[tuple[float, int, bool, int]]]:
+    """A* heuristic's table for one goal: its masks, and per literal (dearest first) the cheapest step that
+    makes it true (adds a needed atom, deletes a forbidden one), the atom's bit, whether it must be present,
+    and the steps that can make it true (a bit per operator of the table, only those `searched`)."""
+    out = []
+    for atoms, present in ((goal[0], True), (goal[1], False)):
+        for a in atoms:
+            b = m.bit[a]
+            makers = searched & (table.adders.get(a, 0) if present else
+                                 sum(1 << i for i in range(len(table.ops)) if not m.keep[i] & b))
+            out.append((min((table.ops[i].cost for i in _bits(makers)), default=INF), b, present, makers))
+    out.sort(key=lambda x: -x[0])
+    return m.of(goal[0]), m.of(goal[1]), out
 
 
-def _levels(literals: list[tuple[float, int, bool]]) -> list[tuple[float, int, int]]:
-    """A* heuristic's table: the literals of one cost merged into two masks (must be present, must be absent),
-    dearest first. A lower bound on the cost from a state to the goal (admissible, so plans stay cheapest) is the
-    cost of the first level with a literal the state lacks: every such literal needs a step of its own, so the
-    dearest of those steps at least; infinite when no step makes one of them true. Tested a level at a time, not
-    a literal at a time (a fifth of a compile went there; the bound, and so every plan, is the same)."""
-    levels: dict[float, list[int]] = {}
-    for cost, b, present in literals:
-        level = levels.setdefault(cost, [0, 0])
-        level[0 if present else 1] |= b
-    return [(cost, pos, neg) for cost, (pos, neg) in sorted(levels.items(), key=lambda kv: -kv[0])]
+def _bound(s: int, literals: list[tuple[float, int, bool, int]]) -> float:
+    """A lower bound on the cost from state `s` to the goal of `literals` (`_achiever_bounds`): the missing
+    literals taken dearest first, each counted when none of the steps that make it true could make one already
+    counted true. No step serves two counted literals, so a plan needs a distinct step for each, and the sum of
+    their cheapest costs never overestimates (admissible: plans stay cheapest). It is at least the dearest
+    missing literal's cost, the bound this planner used before: a rearrange-table plan grasps, carries and
+    places each utensil, and with the dearest step alone A* walked five times as many states."""
+    total, used = 0.0, 0
+    for cost, b, present, makers in literals:
+        if ((not s & b) if present else s & b) and not makers & used:
+            total += cost
+            used |= makers
+    return total
+
+
+def _bits(x: int) -> Iterable[int]:
+    """The indices of the set bits of `x`."""
+    while x:
+        low = x & -x
+        yield low.bit_length() - 1
+        x ^= low
 
 
 def relevant(ops: "list[GroundOp] | OpTable", goal: Goal) -> list[GroundOp]:
