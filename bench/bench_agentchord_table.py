@@ -2,7 +2,8 @@
 95 % interval, mean episode steps, sim time, execution time (sim + measured reasoning), modelled execution
 time (sim + calls x 5 s), the steps and modelled time of the trials it completed (the paper's "steps executed
 to complete a task"), reasoning calls after planning, recoveries, recovery latency (firing -> first
-recovery command), and detection delay (a drop -> the monitor's firing or the replan, in 10 ms control steps:
+recovery command), and detection delay (a drop -> the monitor's firing, the replan, or for a drop during a recovery
+the recovery watch's "recovery disturbed", in 10 ms control steps:
 monitors that read the pads run every control step, so for them it is about the persistence window; checks
 made by a verifier at sub-goals see the drop only when the action ends).
 
@@ -33,7 +34,7 @@ CONTROL_DT_S = 0.01
 
 def detection_delays(r) -> list[float]:  # noqa: ANN001 - a TrialRecord
     drops = [e.t for e in r.events if e.kind == "disturbance"]
-    found = [e.t for e in r.events if e.kind in ("monitor", "replan", "backtrack")]
+    found = [e.t for e in r.events if e.kind in ("monitor", "replan", "backtrack", "recovery disturbed")]
     out = []
     for t in drops:
         after = [f for f in found if f >= t]
