@@ -1,7 +1,7 @@
 """A small STRIPS planner: typed operators grounded over the scene's arms and objects, cheapest plan by
-A* search (an admissible bound: the dearest single step a missing goal literal needs). The embedded composer
-plans the nominal graph with it and the embedded arranger plans each recovery branch (from the state a failure
-leaves to a merge node) with it, over one `OpTable` of the operators' bit masks for all its searches.
+A* search (an admissible bound: the missing goal literals no one step makes together, added up, `_bound`). The
+embedded composer plans the nominal graph with it and the embedded arranger plans each recovery branch (from the
+state a failure leaves to a merge node) with it, over one `OpTable` of the operators' bit masks for all its searches.
 
 States are frozensets of ground atoms `("holding", "right", "bottle")` under the closed-world assumption.
 """
@@ -265,7 +265,6 @@ def _search(initial: State, goals: list[Goal], table: OpTable, max_expansions: i
     m = table.masks.extended(itertools.chain(initial, *(g[0] | g[1] for g in goals)), table.ops)
     need = (frozenset().union(*(g[0] for g in goals)), frozenset().union(*(g[1] for g in goals)))
     chosen = table.relevant(need, m)
-    ops = [table.ops[i] for i in chosen]
     steps_of = [(m.pre_pos[i], m.pre_neg[i], m.keep[i], m.add[i], table.ops[i].cost, table.ops[i]) for i in chosen]
     filed: dict[int, list[int]] = {}
     always: list[int] = []
