@@ -150,3 +150,26 @@ def test_a_bottle_propped_up_is_taken_square_to_its_axis(planner: Planner, eleva
 def test_a_bottle_lying_on_the_table_is_still_taken_straight_down(planner: Planner, elevation: float) -> None:
     rot = _grasp_rot(planner, _propped(elevation))
     assert rot[:, 2] == pytest.approx([0.0, 0.0, -1.0], abs=1e-9)
+
+
+def test_a_side_on_hand_right_over_the_block_it_lost_rises_until_it_can_turn_down(planner: Planner) -> None:
+    """Handover seed 25: the placing hand (side-on, 13 cm up) lost the block, which fell just below it. The hand
+    is already over the block's top, but turning to point down from there sweeps the fingers through it; it
+    rises in steps until the turn passes, instead of going home to turn (0.36 s longer). The hand and the
+    perceived block are those of that trial."""
+    p = Planner(planner.cfg, planner.iks, {**planner.shapes, "block": SimpleNamespace(grasp="top")})
+    top, bottom = (0.3997, -0.2496, 0.05), (0.3997, -0.2496, 0.0)
+    block = ObjectFeatures(name="block", visible=True, n_points=500, fit="primitive", centroid=(0.3997, -0.2496, 0.025),
+                           axis=(0.0, 0.0, 1.0), extent=(0.0487, 0.0613, 0.0596), tilt_deg=None, upright=None,
+                           extremes={"top": top, "bottom": bottom, "axis_pos": top, "axis_neg": bottom})
+    pos = np.array([0.4007, -0.2596, 0.1297])
+    rot = np.array([[0.0, -1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, 0.0, 0.0]])
+    view = ArmView(q=np.array([-0.2281, 0.7266, 1.8173, 1.3811, 1.6986, -2.5558]), pos=pos, rot=rot, base=BASE,
+                   touching={})
+    steps = p._grasp(A.Grasp(arm="right", obj="block"), view, {"block": block})
+    hover = next(s for s in steps if s.label.startswith("above"))
+    assert p._sweep_gap("right", view.q, hover.waypoints[-1], [block]) < SWEEP_CLEAR_M  # premise: no straight turn
+    assert _labels(steps)[:3] == ["open", "rise clear", "above block top-down"]
+    rise = steps[1]
+    assert np.allclose(rise.tcp[0][:2], pos[:2], atol=1e-9) and pos[2] < rise.tcp[0][2] <= pos[2] + 0.25
+    assert p._sweep_gap("right", rise.waypoints[-1], hover.waypoints[-1], [block]) >= SWEEP_CLEAR_M

@@ -50,6 +50,8 @@ often right beside what fell or what the other hand holds up, and a joint-space 
 fingers through it (pour-dual: the held cup knocked out of the left hand)."""
 SWEEP_SAMPLES = 24
 RISE_MAX_M = 0.25
+RISE_STEP_M = 0.05
+"""Clearing the way for a joint-space move: rise in steps of this much until the move passes."""
 HAND_HALF_OPEN_M = 0.05
 PALM_BACK_M = 0.035
 """The open hand, as points about the tool centre: the pads' tips and roots either side, and the palm behind."""
@@ -297,21 +299,26 @@ class Planner:
 
     def _way_clear(self, arm: str, view: ArmView, q_goal: np.ndarray, feats: dict) -> list[Step]:
         """Steps that clear the way for a joint-space move to q_goal: none when it passes every perceived object
-        by SWEEP_CLEAR_M; else a straight rise over the tallest of them, and home as well when even the move
-        from up there would not pass."""
+        by SWEEP_CLEAR_M; else a straight rise over the tallest of them, or RISE_STEP_M steps higher, the least from
+        which that move passes, and home as well when none does up to RISE_MAX_M. A hand that turns from side-on
+        to pointing down right over the object it lost (handover seed 25: the block fell 10 cm from the placing
+        hand) passes after a 10 cm rise: 0.36 s sooner than going home to turn."""
         objs = [o for o in feats.values() if o.visible and o.centroid is not None]
         if not objs or self._sweep_gap(arm, view.q, q_goal, objs) >= SWEEP_CLEAR_M:
             return []
-        steps: list[Step] = []
-        up = min(max(top_z(o) for o in objs) + HOVER_CLEARANCE_M + PAD_HALF[2] - view.pos[2], RISE_MAX_M)
-        if up > 0.0:
+        over = min(max(top_z(o) for o in objs) + HOVER_CLEARANCE_M + PAD_HALF[2] - view.pos[2], RISE_MAX_M)
+        first = None  # the rise over the tallest object: taken on the way home when no rise lets the move pass
+        for up in np.arange(over if over > 0.0 else RISE_STEP_M, RISE_MAX_M + 1e-9, RISE_STEP_M):
             rise = self._linear_prefix(arm, (view.pos, view.rot), (view.pos + np.array([0.0, 0.0, up]), view.rot),
                                        view.q, "rise clear")
-            if rise is not None:
-                if self._sweep_gap(arm, rise.waypoints[-1], q_goal, objs) >= SWEEP_CLEAR_M:
-                    return [rise]
-                steps.append(rise)
-        return steps + [self._home(arm)]
+            if rise is None:
+                break
+            first = first or rise
+            if self._sweep_gap(arm, rise.waypoints[-1], q_goal, objs) >= SWEEP_CLEAR_M:
+                return [rise]
+            if rise.tcp[0][2] < view.pos[2] + up - 1e-3:  # the line stopped short: higher is out of reach
+                break
+        return ([first] if first is not None and over > 0.0 else []) + [self._home(arm)]
 
     def _home(self, arm: str) -> Move:
         home = self.iks[arm].home
