@@ -22,7 +22,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import kintsugi  # noqa: E402,F401 - sets MUJOCO_GL before mujoco is imported
-from kintsugi.errors import KintsugiError  # noqa: E402
+from kintsugi.core.errors import KintsugiError  # noqa: E402
 from kintsugi.methods.agentchord.compile import compile_graph  # noqa: E402
 from kintsugi.methods.agentchord.keyframes import TabletopKeyframes  # noqa: E402
 from kintsugi.methods.agentchord.method import AgentChord  # noqa: E402
@@ -30,7 +30,7 @@ from kintsugi.methods.agentchord.observe import features  # noqa: E402
 from kintsugi.reasoning import make_reasoner  # noqa: E402
 from kintsugi.reasoning.base import RecordingReasoner  # noqa: E402
 from kintsugi.taskgraph.monitor import MonitorBank  # noqa: E402
-from kintsugi.trial import ReasonerSettings  # noqa: E402
+from kintsugi.core.record import ReasonerSettings
 
 
 def compile_once(task, robot, cfg):  # noqa: ANN001, ANN201
@@ -49,10 +49,11 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--steps", type=int, default=20000)
     args = ap.parse_args()
-    from kintsugi.tasks import TASKS, load_all
-    from kintsugi.tasks.tabletop.robot import TabletopRobot
+    from kintsugi.core.plugins import load_builtins
+    from kintsugi.core.registry import TASKS
+    from kintsugi.worlds.tabletop.robot import TabletopRobot
 
-    load_all()
+    load_builtins()
     pour = None
     print("(a) compile per task (composer + arranger + keyframes; first perception shown apart)")
     for entry in TASKS:

@@ -21,7 +21,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 from bench_mppi import machine  # noqa: E402
 from kintsugi.campaign.stats import format_rate  # noqa: E402
-from kintsugi.trial import TrialRecord  # noqa: E402
+from kintsugi.core.record import TrialRecord
 
 
 def _errors(beliefs: dict | None, params: dict, obj: str) -> tuple[float, float] | None:

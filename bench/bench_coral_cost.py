@@ -23,7 +23,8 @@ import numpy as np  # noqa: E402
 
 import kintsugi.methods.builtin  # noqa: E402,F401
 from bench_mppi import machine  # noqa: E402
-from kintsugi.tasks import TASKS, load_all  # noqa: E402
+from kintsugi.core.plugins import load_builtins  # noqa: E402
+from kintsugi.core.registry import TASKS
 
 
 def measure(name: str, repeats: int) -> dict[str, float]:
@@ -31,13 +32,13 @@ def measure(name: str, repeats: int) -> dict[str, float]:
     from kintsugi.methods.coral.env import entry_env, rollout_env, static_env
     from kintsugi.methods.coral.method import VARIANTS, Coral, probe_limits
     from kintsugi.methods.coral.stages import attractor_of
-    from kintsugi.reasoning.costlib import compose
-    from kintsugi.reasoning.formulate import check_formulation
-    from kintsugi.tasks.contact.costs import View, total
-    from kintsugi.tasks.contact.execute import mppi_config
-    from kintsugi.tasks.contact.robot import ContactRobot
-    from kintsugi.tasks.contact.world import PlanningWorld
-    from kintsugi.trial import TrialSpec
+    from kintsugi.methods.coral.costlib import compose
+    from kintsugi.methods.coral.formulate import check_formulation
+    from kintsugi.methods.mppi.costs import View, total
+    from kintsugi.methods.mppi.execute import mppi_config
+    from kintsugi.worlds.contact.robot import ContactRobot
+    from kintsugi.worlds.contact.world import PlanningWorld
+    from kintsugi.core.record import TrialSpec
 
     task = TASKS.get(name).factory()
     cfg = task.config({})
@@ -85,7 +86,7 @@ def main() -> None:
     ap.add_argument("--tasks", default="pick-box,pick-clutter,push-force,flip-box,flip-wall")
     ap.add_argument("--repeats", type=int, default=5)
     args = ap.parse_args()
-    load_all()
+    load_builtins()
     print(f"machine: {machine()}")
     out = {}
     for name in args.tasks.split(","):

@@ -25,7 +25,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")
 
 from kintsugi.campaign.plan import CampaignConfig  # noqa: E402
 from kintsugi.campaign.runner import run_campaign  # noqa: E402
-from kintsugi.config import parse_override  # noqa: E402
+from kintsugi.core.config import parse_override  # noqa: E402
 from kintsugi.export import export_campaign  # noqa: E402
 
 
@@ -51,7 +51,7 @@ def main() -> None:
                              conditions=[args.condition], trials=args.trials, base_seed=args.seed, overrides=overrides)
         records = run_campaign(cfg, root / "campaign", workers=1, executor="inline", progress=False)
         plain = sum(r.wall_time for r in records) / len(records)
-        from kintsugi.tasks import TASKS
+        from kintsugi.core.registry import TASKS
 
         sim = TASKS.get(args.task).factory().config(overrides).sim
         per_tick = max(1, round(sim.control_dt_s / sim.timestep_s))

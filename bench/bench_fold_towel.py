@@ -35,8 +35,11 @@ import time
 import kintsugi  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
 import mujoco
 
-from kintsugi.tasks import TASKS, load_all
-from kintsugi.trial import TrialSpec, run_trial
+from kintsugi.core.plugins import load_builtins
+
+from kintsugi.core.registry import TASKS
+from kintsugi.core.record import TrialSpec
+from kintsugi.core.runner import run_trial
 
 
 def raw_steps_per_s(overrides: dict, steps: int) -> float:
@@ -52,8 +55,8 @@ def raw_steps_per_s(overrides: dict, steps: int) -> float:
 
 
 def features_ms_per_view(repeats: int = 20) -> float:
-    from kintsugi.tasks.tabletop.robot import TabletopRobot
-    from kintsugi.tasks.tabletop.scene import CAMERAS
+    from kintsugi.worlds.tabletop.robot import TabletopRobot
+    from kintsugi.worlds.tabletop.scene import CAMERAS
 
     task = TASKS.get("fold-towel").factory()
     world, *_ = task.build(task.config({}), "pose", 0)
@@ -76,10 +79,10 @@ def grasp_modes(seed: int, inset: float, tip: float) -> list[tuple[float, float,
     """Per offset and arm: the held corner's height below the tool centre point after a 6 cm lift."""
     import numpy as np
 
-    from kintsugi.tasks.tabletop import fold_towel as ft
-    from kintsugi.tasks.tabletop.cloth import TOWEL, corner_indices
-    from kintsugi.tasks.tabletop.robot import TabletopRobot
-    from kintsugi.tasks.tabletop.task import expand
+    from kintsugi.worlds.tabletop import fold_towel as ft
+    from kintsugi.worlds.tabletop.cloth import TOWEL, corner_indices
+    from kintsugi.worlds.tabletop.robot import TabletopRobot
+    from kintsugi.worlds.tabletop.task import expand
 
     ft.INSET_M, ft.TIP_CLEARANCE_M = inset, tip
     task = TASKS.get("fold-towel").factory()
@@ -134,12 +137,12 @@ def main() -> None:
     ap.add_argument("--grip", action="store_true", help="only (e): fold and release outcome per squeeze")
     ap.add_argument("--forces", type=float, nargs="+", default=[6.0, 20.0], help="(e) squeezes, N")
     args = ap.parse_args()
-    load_all()
+    load_builtins()
     if args.grip:
         grip_sweep(args.forces, args.trials)
         return
     if args.grasp:
-        from kintsugi.tasks.tabletop import fold_towel as ft
+        from kintsugi.worlds.tabletop import fold_towel as ft
 
         inset = ft.INSET_M if args.inset is None else args.inset
         tip = ft.TIP_CLEARANCE_M if args.tip is None else args.tip

@@ -85,9 +85,9 @@ def cpu_model() -> str:
 
 def live() -> None:
     import kintsugi  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
-    from kintsugi.tasks.tabletop.config import TabletopConfig
-    from kintsugi.tasks.tabletop.robot import TabletopRobot
-    from kintsugi.tasks.tabletop.world import StartPose, TabletopWorld
+    from kintsugi.worlds.tabletop.config import TabletopConfig
+    from kintsugi.worlds.tabletop.robot import TabletopRobot
+    from kintsugi.worlds.tabletop.world import StartPose, TabletopWorld
 
     world = TabletopWorld(TabletopConfig(), ["bottle", "cup"],
                           {"bottle": StartPose(x=0.40, y=-0.25), "cup": StartPose(x=0.46, y=0.0)})

@@ -23,12 +23,12 @@ import mujoco
 import numpy as np
 
 from kintsugi.control import MPPI, MPPIConfig
-from kintsugi.tasks.contact.conditions import Drawer
-from kintsugi.tasks.contact.config import PickBoxConfig
-from kintsugi.tasks.contact.costs import View, norm, smoothness, total, yaw_error
-from kintsugi.tasks.contact.pick_box import TASK
-from kintsugi.tasks.contact.robot import ContactRobot
-from kintsugi.tasks.contact.world import EvaluationWorld, PlanningWorld
+from kintsugi.worlds.contact.conditions import Drawer
+from kintsugi.worlds.contact.config import PickBoxConfig
+from kintsugi.methods.mppi.costs import View, norm, smoothness, total, yaw_error
+from kintsugi.worlds.contact.pick_box import TASK
+from kintsugi.worlds.contact.robot import ContactRobot
+from kintsugi.worlds.contact.world import EvaluationWorld, PlanningWorld
 
 
 def machine() -> str:

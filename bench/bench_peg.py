@@ -22,13 +22,14 @@ import kintsugi  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
 import mujoco
 import numpy as np
 
-from kintsugi.tasks import load_all
-from kintsugi.tasks.peg.conditions import sample_params
-from kintsugi.tasks.peg.config import PegTaskConfig
-from kintsugi.tasks.peg.goals import full_goals, load_goals
-from kintsugi.tasks.peg.skills import SEQUENCE, execute_skill
-from kintsugi.tasks.peg.world import HOME_POSE, PegWorld
-from kintsugi.trial import TrialSpec, run_trial
+from kintsugi.core.plugins import load_builtins
+from kintsugi.worlds.peg.conditions import sample_params
+from kintsugi.worlds.peg.config import PegTaskConfig
+from kintsugi.worlds.peg.goals import full_goals, load_goals
+from kintsugi.worlds.peg.skills import SEQUENCE, execute_skill
+from kintsugi.worlds.peg.world import HOME_POSE, PegWorld
+from kintsugi.core.record import TrialSpec
+from kintsugi.core.runner import run_trial
 
 SHAPES = ("round", "square", "rectangle")
 TARGET_TRIAL_S = 1.5
@@ -126,7 +127,7 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0, help="first trial seed")
     ap.add_argument("--repeats", type=int, default=5, help="repeats of the step-rate run (best is kept)")
     args = ap.parse_args()
-    load_all()
+    load_builtins()
 
     print(f"machine: {platform.platform()} | {platform.processor() or platform.machine()} | "
           f"{os.cpu_count()} CPUs | Python {sys.version.split()[0]} | mujoco {mujoco.__version__}")

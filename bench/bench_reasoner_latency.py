@@ -27,7 +27,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from kintsugi.reasoning.base import RecordingReasoner  # noqa: E402
 from kintsugi.reasoning.openai_backend import OpenAIReasoner  # noqa: E402
-from kintsugi.reasoning.types import (  # noqa: E402
+from kintsugi.methods.recovery.types import (  # noqa: E402
     AnalyzeReply,
     AnalyzeRequest,
     CameraCalibration,

@@ -32,13 +32,15 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 import kintsugi  # noqa: E402,F401 - sets MUJOCO_GL
 import kintsugi.methods.builtin  # noqa: E402,F401
 from bench_mppi import machine  # noqa: E402
-from kintsugi.tasks import TASKS, load_all  # noqa: E402
-from kintsugi.tasks.contact.execute import run_attempt  # noqa: E402
-from kintsugi.tasks.contact.experts import expert_design  # noqa: E402
-from kintsugi.tasks.contact.identify import BeliefFitter  # noqa: E402
-from kintsugi.tasks.contact.robot import ContactRobot  # noqa: E402
-from kintsugi.tasks.contact.world import PlanningWorld  # noqa: E402
-from kintsugi.trial import TrialLog, TrialSpec  # noqa: E402
+from kintsugi.core.plugins import load_builtins  # noqa: E402
+from kintsugi.core.registry import TASKS
+from kintsugi.methods.mppi.execute import run_attempt  # noqa: E402
+from kintsugi.methods.expert.designs import expert_design  # noqa: E402
+from kintsugi.methods.mppi.identify import BeliefFitter  # noqa: E402
+from kintsugi.worlds.contact.robot import ContactRobot  # noqa: E402
+from kintsugi.worlds.contact.world import PlanningWorld  # noqa: E402
+from kintsugi.core.log import TrialLog
+from kintsugi.core.record import TrialSpec
 
 MAX_CYCLES = 4
 CONVERGED = 0.05
@@ -48,16 +50,16 @@ def coral_prior(ctx) -> dict:  # noqa: ANN001 - a ContactContext
     """The physics-priors role's guess, from the labels and known sizes only (as coral asks it)."""
     from kintsugi.methods.coral.method import object_views
     from kintsugi.reasoning import make_reasoner
-    from kintsugi.reasoning.coral_types import PriorsRequest
-    from kintsugi.reasoning.priors import ask_priors
-    from kintsugi.tasks.contact.objects import Physics
+    from kintsugi.methods.coral.types import PriorsRequest
+    from kintsugi.methods.coral.priors import ask_priors
+    from kintsugi.worlds.contact.objects import Physics
 
     reply, _ = ask_priors(make_reasoner(ctx.reasoner), PriorsRequest(task=ctx.task_text, objects=object_views(ctx.known)))
     return {k: Physics(mass_kg=v.mass_kg, friction=v.friction) for k, v in reply.objects.items()}
 
 
 def one(task_name: str, seed: int, prior: str = "scaled", all_cycles: bool = False) -> dict:
-    from kintsugi.methods.contact import MPPISysId
+    from kintsugi.methods.expert.method import MPPISysId
 
     task = TASKS.get(task_name).factory()
     cfg = task.config({})
@@ -138,7 +140,7 @@ def main() -> None:
     ap.add_argument("--all-cycles", action="store_true", help="run all four cycles (the sensitivity study)")
     args = ap.parse_args()
     print("machine:", machine())
-    load_all()
+    load_builtins()
     rows = [one(t, s, args.prior, args.all_cycles) for t in args.tasks.split(",") for s in seeds_of(args.seeds)]
     for r in rows:
         print(f"{r['task']} seed {r['seed']}: prior error mass {r['prior_mass_error']:.0%} friction "

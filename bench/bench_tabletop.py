@@ -25,12 +25,13 @@ import kintsugi  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
 import mujoco
 import numpy as np
 
-from kintsugi.tasks.tabletop.config import OBJECT_KINDS, TabletopConfig
-from kintsugi.tasks.tabletop.ik import ArmIK
-from kintsugi.tasks.tabletop.perceive import ObjectPerception
-from kintsugi.tasks.tabletop.planning import down_rotation, side_rotation
-from kintsugi.tasks.tabletop.world import StartPose, TabletopWorld
-from kintsugi.trial import TrialSpec, run_trial
+from kintsugi.worlds.tabletop.config import OBJECT_KINDS, TabletopConfig
+from kintsugi.worlds.tabletop.ik import ArmIK
+from kintsugi.worlds.tabletop.perceive import ObjectPerception
+from kintsugi.worlds.tabletop.planning import down_rotation, side_rotation
+from kintsugi.worlds.tabletop.world import StartPose, TabletopWorld
+from kintsugi.core.record import TrialSpec
+from kintsugi.core.runner import run_trial
 
 FULL_LAYOUT = {
     "bottle": StartPose(x=0.45, y=-0.35), "cup": StartPose(x=0.45, y=-0.15), "plate": StartPose(x=0.58, y=0.05),

@@ -1,4 +1,4 @@
-"""How `kintsugi/tasks/peg/default_goals.json` was taught, and how much margin it has.
+"""How `kintsugi/worlds/peg/default_goals.json` was taught, and how much margin it has.
 
     .venv/bin/python bench/teach_goals.py [--span 7.5] [--step 1.5] [--write]
     .venv/bin/python bench/teach_goals.py --set wrist.roll_stiffness=1.5 --shapes round --out goals.json
@@ -31,12 +31,12 @@ import kintsugi  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
 import mujoco
 import numpy as np
 
-from kintsugi.config import apply_overrides
-from kintsugi.errors import KintsugiError
-from kintsugi.tasks.peg.config import PegTaskConfig
-from kintsugi.tasks.peg.goals import DEFAULT_GOALS_FILE, full_goals, load_goals
-from kintsugi.tasks.peg.skills import AXES, execute_skill
-from kintsugi.tasks.peg.world import HOME_POSE, PegWorld, TrialParams
+from kintsugi.core.config import apply_overrides
+from kintsugi.core.errors import KintsugiError
+from kintsugi.worlds.peg.config import PegTaskConfig
+from kintsugi.worlds.peg.goals import DEFAULT_GOALS_FILE, full_goals, load_goals
+from kintsugi.worlds.peg.skills import AXES, execute_skill
+from kintsugi.worlds.peg.world import HOME_POSE, PegWorld, TrialParams
 
 SHAPES = {"round": "r", "square": "s", "rectangle": "R", "polygon6": "6"}
 Y = AXES.index("y")

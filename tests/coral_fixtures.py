@@ -8,11 +8,11 @@ from typing import Any
 
 def coral_scene(task_name: str, seed: int) -> tuple[Any, Any, Any, Any, Any]:
     """(ctx, cfg, first observation, formulation request, evaluation world); the caller closes the world."""
-    import kintsugi.tasks.contact.tasks  # noqa: F401
+    import kintsugi.worlds.contact.tasks  # noqa: F401
     from kintsugi.methods.coral.method import VARIANTS, Coral
-    from kintsugi.tasks import TASKS
-    from kintsugi.tasks.contact.robot import ContactRobot
-    from kintsugi.trial import TrialSpec
+    from kintsugi.core.registry import TASKS
+    from kintsugi.worlds.contact.robot import ContactRobot
+    from kintsugi.core.record import TrialSpec
 
     task = TASKS.get(task_name).factory()
     cfg = task.config({})

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from kintsugi.reasoning.coral_types import FixtureView, FormulationRequest, MarkerView, ObjectPrior, ObjectState, RobotView
-from kintsugi.reasoning.formulate import variable_docs
+from kintsugi.methods.coral.types import FixtureView, FormulationRequest, MarkerView, ObjectPrior, ObjectState, RobotView
+from kintsugi.methods.coral.formulate import variable_docs
 from kintsugi.sandbox import FUNCTIONS
 
 ROBOT = RobotView(max_opening_m=0.1, finger_length_m=0.06, kp_n_per_m=600.0, force_limit_n=25.0, table_edge_x_m=0.3,

@@ -22,8 +22,8 @@ from pathlib import Path
 
 import numpy as np
 
-from kintsugi.tasks import TASKS
-from kintsugi.trial import TrialRecord, TrialSpec
+from kintsugi.core.registry import TASKS
+from kintsugi.core.record import TrialRecord, TrialSpec
 
 P_SUCCESS = {"fair": 0.5, "biased": 0.8, "raises": 0.5, "crashes": 0.5, "wrong-key": 0.5, "slow": 0.5,
              "hangs": 0.5}

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any, Literal
 
-from kintsugi.config import StrictModel
+from kintsugi.core.config import StrictModel
 from kintsugi.taskgraph.model import TaskGraph
 from kintsugi.taskgraph.vocabulary import Vocabulary
 
@@ -116,7 +116,7 @@ def pour_graph() -> TaskGraph:
 
 def seen_scene(bottle_held_by: str | None = None, bottle_upright: bool = True):
     """What perception and the arms would report for a pour layout: bottle at (0.40, -0.26), cup at (0.46, 0)."""
-    from kintsugi.reasoning.taskgraph_types import SeenArm, SeenObject
+    from kintsugi.methods.agentchord.types import SeenArm, SeenObject
 
     bottom = 0.2 if bottle_held_by else 0.0
     objects = [
@@ -137,14 +137,14 @@ POUR_GOAL = ["poured(bottle, cup)", "upright(bottle)", "on_table(bottle)", "rele
 
 def composer_request(task: str = POUR_TEXT, goal: list[str] | None = None, **scene):
     from kintsugi.methods.agentchord.domain import TABLETOP_DOMAIN
-    from kintsugi.reasoning.taskgraph_types import ComposerRequest
+    from kintsugi.methods.agentchord.types import ComposerRequest
 
     objects, arms = seen_scene(**scene)
     return ComposerRequest(task=task, goal=goal or POUR_GOAL, objects=objects, arms=arms, domain=TABLETOP_DOMAIN)
 
 
 def arranger_request(composer_reply, request):
-    from kintsugi.reasoning.taskgraph_types import ArrangerRequest
+    from kintsugi.methods.agentchord.types import ArrangerRequest
 
     return ArrangerRequest(task=request.task, graph=composer_reply.graph, node_facts=composer_reply.node_facts,
                            edge_operators=composer_reply.edge_operators, objects=request.objects, arms=request.arms,

@@ -11,7 +11,7 @@ from __future__ import annotations
 import importlib
 import os
 
-from kintsugi.errors import KintsugiError
+from kintsugi.core.errors import KintsugiError
 
 _loaded: set[tuple[str, ...]] = set()
 
@@ -20,7 +20,8 @@ def bootstrap(plugins: list[str] | tuple[str, ...], task: str) -> None:
     """Import plugin modules, then built-in tasks if `task` is still unknown; raise if it stays unknown."""
     # Workers render headless; EGL is the default GL for MuJoCo there unless the user chose another.
     os.environ.setdefault("MUJOCO_GL", "egl")
-    from kintsugi.tasks import TASKS, load_all
+    from kintsugi.core.plugins import load_builtins
+    from kintsugi.core.registry import TASKS
 
     key = (task, *plugins)
     if key in _loaded and task in TASKS:
@@ -36,7 +37,7 @@ def bootstrap(plugins: list[str] | tuple[str, ...], task: str) -> None:
     builtin_error: Exception | None = None
     if task not in TASKS:
         try:
-            load_all()
+            load_builtins()
         except Exception as exc:  # noqa: BLE001 - only fatal if the task stays unknown
             builtin_error = exc
     if task not in TASKS:

@@ -27,9 +27,10 @@ from concurrent.futures.process import BrokenProcessPool
 from typing import Callable, Iterable, Iterator, Protocol
 
 from kintsugi.campaign.bootstrap import bootstrap
-from kintsugi.errors import KintsugiError
-from kintsugi.registry import Registry
-from kintsugi.trial import TrialRecord, TrialSpec, run_trial
+from kintsugi.core.errors import KintsugiError
+from kintsugi.core.registry import Registry
+from kintsugi.core.record import TrialRecord, TrialSpec
+from kintsugi.core.runner import failed_record, run_trial
 
 
 class Executor(Protocol):
@@ -41,14 +42,6 @@ class Executor(Protocol):
 ExecutorFactory = Callable[..., Executor]
 """(workers, plugins, trial_timeout_s=None) -> Executor."""
 EXECUTORS: Registry[ExecutorFactory] = Registry("executor")
-
-
-def failed_record(spec: TrialSpec, error: str) -> TrialRecord:
-    """A failed trial that never produced its own record (crash, lost worker)."""
-    return TrialRecord(
-        key=spec.key, task=spec.task, method=spec.method, variant=spec.variant,
-        condition=spec.condition, seed=spec.seed, error=error,
-    )
 
 
 def run_in_worker(spec: TrialSpec, plugins: list[str]) -> TrialRecord:
@@ -114,12 +107,12 @@ def _kill(pool: ProcessPoolExecutor) -> None:
 def warm_up(plugins: list[str]) -> int:
     """Start a worker and import the plugins and built-in tasks in it (errors surface later, per trial).
 
-    Every trial calls `load_all()`; importing the worlds (MuJoCo, OpenCV, mink) takes seconds on a
+    Every trial calls `load_builtins()`; importing the worlds (MuJoCo, OpenCV, mink) takes seconds on a
     loaded machine, which must not be charged to the first trial's timeout.
     """
-    from kintsugi.tasks import load_all
+    from kintsugi.core.plugins import load_builtins
 
-    for load in [*(lambda m=m: importlib.import_module(m) for m in plugins), load_all]:
+    for load in [*(lambda m=m: importlib.import_module(m) for m in plugins), load_builtins]:
         try:
             load()
         except Exception:  # noqa: BLE001 - reported by the trial that needs it

@@ -11,9 +11,9 @@ from typing import Any
 
 from pydantic import Field, ValidationError, field_validator
 
-from kintsugi.config import StrictModel
-from kintsugi.errors import ConfigError
-from kintsugi.trial import ReasonerSettings, TrialSpec
+from kintsugi.core.config import StrictModel
+from kintsugi.core.errors import ConfigError
+from kintsugi.core.record import ReasonerSettings, TrialSpec
 
 # Fields that may change between runs into the same out dir: the trial count may
 # grow (or shrink), and which trials record videos does not change any outcome.
@@ -84,54 +84,45 @@ def build_config(**fields: Any) -> CampaignConfig:
 def validate(cfg: CampaignConfig) -> None:
     """Check every name and setting a campaign uses, so a typo fails before the first trial, not in every one.
 
-    In order: task and plugins, methods, `--set` overrides against the task's typed config,
-    variants, conditions, the reasoner backend and its settings (building it checks e.g. that
-    the openai backend has a key or a base URL). A task opts in to the finer checks with
-    `methods` (the names it runs, when it does not use the METHODS registry), `config(overrides)`,
-    `check_variant(name, config)` and `conditions`.
+    In order: task and plugins, methods (each must drive the task's robot), `--set` overrides
+    against the task's typed config and `method.*` ones against each method's, variants,
+    conditions, the reasoner backend and its settings (building it checks e.g. that the openai
+    backend has a key or a base URL).
     """
     from kintsugi.campaign.bootstrap import bootstrap
+    from kintsugi.core.registry import METHODS, TASKS
+    from kintsugi.core.runner import split_overrides
     from kintsugi.reasoning import make_reasoner
-    from kintsugi.tasks import TASKS
 
     bootstrap(cfg.plugins, cfg.task)
     task = TASKS.get(cfg.task).factory()
-    own_methods = getattr(task, "methods", None)
-    if own_methods is None:
-        import kintsugi.methods.builtin  # noqa: F401 - registers the built-in methods
-        from kintsugi.methods import METHODS
-
-        tag = getattr(task, "method_tag", None)
-        for name in cfg.methods:
-            if tag is not None and tag not in METHODS.get(name).tags:
-                fits = ", ".join(e.name for e in METHODS if tag in e.tags) or "(none)"
-                raise ConfigError(f"method {name!r} does not run task {cfg.task!r}; methods that do: {fits}")
-    else:
-        _known(cfg.methods, own_methods, f"method for task {cfg.task!r}")
-    config = task.config(cfg.overrides) if hasattr(task, "config") else None
-    check_variant = getattr(task, "check_variant", None)
-    if check_variant is not None:
-        for name in cfg.variants:
-            check_variant(name, config)
-    conditions = getattr(task, "conditions", None)
-    if conditions is not None:
-        _known(cfg.conditions, conditions, f"condition for task {cfg.task!r}")
+    task_overrides, method_overrides = split_overrides(cfg.overrides)
+    for name in cfg.methods:
+        entry = METHODS.get(name)
+        if task.method_tag not in entry.tags:
+            fits = ", ".join(e.name for e in METHODS if task.method_tag in e.tags) or "(none)"
+            raise ConfigError(f"method {name!r} does not run task {cfg.task!r}; methods that do: {fits}")
+        entry.configure(method_overrides)
+    config = task.config(task_overrides)
+    for name in cfg.variants:
+        task.check_variant(name, config)
+    _known(cfg.conditions, task.conditions, f"condition for task {cfg.task!r}")
     make_reasoner(cfg.reasoner)
 
 
 def task_defaults(task: str, plugins: list[str] | tuple[str, ...] = ()) -> tuple[str, str, tuple[str, ...]]:
     """What `run` and `bench` use when no method, variant or condition is given: the task's own.
 
-    (reference method, first default variant, default conditions), so that e.g. `kintsugi bench
-    pour-single` runs `scripted` on `default` instead of the peg task's names.
+    (the system's own method, first default variant, default conditions), so that e.g. `kintsugi run
+    pour-single` runs `agentchord` on `default` instead of the peg task's names.
     """
     from kintsugi.campaign.bootstrap import bootstrap
-    from kintsugi.tasks import TASKS
+    from kintsugi.core.registry import TASKS
 
     bootstrap(plugins, task)
     made = TASKS.get(task).factory()
     conditions = getattr(made, "conditions", None) or ("none",)
-    return (getattr(made, "reference_method", "baseline"),
+    return (getattr(made, "default_method", None) or getattr(made, "reference_method", "baseline"),
             next(iter(getattr(made, "default_variants", ("default",)))),
             tuple(getattr(made, "default_conditions", None) or conditions))
 
@@ -142,7 +133,7 @@ def suite_of(task: str, name: str, plugins: list[str] | tuple[str, ...] = ()) ->
     A task offers suites through a `suites` mapping; asking one that has none is a clear error.
     """
     from kintsugi.campaign.bootstrap import bootstrap
-    from kintsugi.tasks import TASKS
+    from kintsugi.core.registry import TASKS
 
     bootstrap(plugins, task)
     suites = getattr(TASKS.get(task).factory(), "suites", None) or {}

@@ -14,7 +14,7 @@ import numpy as np  # noqa: E402
 from kintsugi.campaign.plan import CampaignConfig  # noqa: E402
 from kintsugi.campaign.stats import mean, wilson_interval  # noqa: E402
 from kintsugi.campaign.tables import CONTACT_FORMATIONS, group_by_cell  # noqa: E402
-from kintsugi.trial import TrialRecord  # noqa: E402
+from kintsugi.core.record import TrialRecord
 
 
 def _order(values: list[str]) -> list[str]:

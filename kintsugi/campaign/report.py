@@ -19,8 +19,8 @@ from kintsugi.campaign.render import to_html, to_markdown
 from kintsugi.campaign.runner import error_summary
 from kintsugi.campaign.store import ResultStore
 from kintsugi.campaign.tables import all_tables
-from kintsugi.errors import KintsugiError
-from kintsugi.trial import TrialRecord
+from kintsugi.core.errors import KintsugiError
+from kintsugi.core.record import TrialRecord
 
 _CSS = """
 body{font-family:system-ui,sans-serif;margin:2em;max-width:1200px;color:#222}

@@ -22,7 +22,7 @@ from rich.progress import (
 from kintsugi.campaign.executors import failed_record, make_executor
 from kintsugi.campaign.plan import CampaignConfig, expand, validate
 from kintsugi.campaign.store import ResultStore
-from kintsugi.trial import TrialRecord, TrialSpec
+from kintsugi.core.record import TrialRecord, TrialSpec
 
 
 def _progress(console: Console, enabled: bool) -> Progress:

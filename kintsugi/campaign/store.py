@@ -18,9 +18,9 @@ from pydantic import ValidationError
 
 import kintsugi
 from kintsugi.campaign.plan import RESUMABLE_FIELDS, CampaignConfig
-from kintsugi.errors import KintsugiError
-from kintsugi.outputs import check_output_dir
-from kintsugi.trial import TrialRecord
+from kintsugi.core.errors import KintsugiError
+from kintsugi.core.outputs import check_output_dir
+from kintsugi.core.record import TrialRecord
 
 RESULTS = "results.jsonl"
 MANIFEST = "campaign.json"

@@ -19,7 +19,7 @@ from typing import Iterable, Sequence
 
 from kintsugi.campaign.plan import CampaignConfig
 from kintsugi.campaign.stats import fmt, format_rate, mean, median, ratio
-from kintsugi.trial import TrialRecord
+from kintsugi.core.record import TrialRecord
 
 CONTACT_FORMATIONS = ("fit", "align", "insert")
 

@@ -9,8 +9,8 @@ from __future__ import annotations
 import numpy as np
 from pydantic import field_validator
 
-from kintsugi.config import StrictModel
-from kintsugi.errors import ConfigError
+from kintsugi.core.config import StrictModel
+from kintsugi.core.errors import ConfigError
 
 
 class ForceFeedbackConfig(StrictModel):

@@ -17,12 +17,12 @@ import mujoco
 import numpy as np
 from pydantic import Field
 
-from kintsugi.config import StrictModel
+from kintsugi.core.config import StrictModel
 from kintsugi.control import spline
 from kintsugi.control.feedback import ForceFeedbackConfig, force_feedback
 from kintsugi.control.rollout import RolloutBatch, RolloutEngine
 from kintsugi.control.temperature import mppi_weights, temperature_for_ess
-from kintsugi.errors import ConfigError
+from kintsugi.core.errors import ConfigError
 
 __all__ = [
     "CostFn", "ForceFeedbackConfig", "IterationStats", "MPPI", "MPPIConfig",

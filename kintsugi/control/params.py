@@ -13,7 +13,7 @@ from typing import Literal
 import mujoco
 import numpy as np
 
-from kintsugi.errors import ConfigError, UnknownNameError
+from kintsugi.core.errors import ConfigError, UnknownNameError
 
 Kind = Literal["mass", "friction"]
 _OBJ = {"mass": mujoco.mjtObj.mjOBJ_BODY, "friction": mujoco.mjtObj.mjOBJ_GEOM}

@@ -16,7 +16,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout as mj_rollout
 
-from kintsugi.errors import ConfigError, UnknownNameError
+from kintsugi.core.errors import ConfigError, UnknownNameError
 
 _FULL = mujoco.mjtState.mjSTATE_FULLPHYSICS
 _S = mujoco.mjtState

@@ -30,10 +30,10 @@ import numpy as np
 from pydantic import Field, field_validator, model_validator
 from scipy.optimize import minimize
 
-from kintsugi.config import StrictModel
+from kintsugi.core.config import StrictModel
 from kintsugi.control import params as P
 from kintsugi.control.rollout import RolloutEngine
-from kintsugi.errors import ConfigError
+from kintsugi.core.errors import ConfigError
 
 
 class ParamSpec(StrictModel):

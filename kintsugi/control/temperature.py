@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from kintsugi.errors import ConfigError
+from kintsugi.core.errors import ConfigError
 
 _BISECT_STEPS = 60
 

@@ -14,9 +14,9 @@ from pathlib import Path
 from typing import Callable, Literal
 
 import kintsugi
-from kintsugi.errors import ConfigError, KintsugiError
+from kintsugi.core.errors import ConfigError, KintsugiError
 from kintsugi.export.select import parse_filter
-from kintsugi.trial import TrialSpec
+from kintsugi.core.record import TrialSpec
 
 Format = Literal["lerobot", "hdf5"]
 MANIFEST = "export.json"
@@ -42,7 +42,7 @@ class ExportReport:
 
 
 def _check_out(out: Path) -> None:
-    from kintsugi.outputs import check_output_dir
+    from kintsugi.core.outputs import check_output_dir
 
     check_output_dir(out, "export directory")
     if out.exists() and any(out.iterdir()):
@@ -59,7 +59,7 @@ def export_campaign(campaign_dir: str | Path, fmt: Format, out: str | Path, tria
     from kintsugi.campaign.bootstrap import bootstrap
     from kintsugi.campaign.store import ResultStore
     from kintsugi.export.replay import frame_stride, replay
-    from kintsugi.tasks import TASKS
+    from kintsugi.core.registry import TASKS
 
     if fmt not in ("lerobot", "hdf5"):
         raise ConfigError(f"unknown export format {fmt!r}; known: hdf5, lerobot")

@@ -30,7 +30,7 @@ def _h5py() -> Any:
     try:
         import h5py
     except ImportError:
-        from kintsugi.errors import ConfigError
+        from kintsugi.core.errors import ConfigError
 
         raise ConfigError("--format hdf5 needs h5py: pip install 'kintsugi[export]'") from None
     return h5py

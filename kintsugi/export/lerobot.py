@@ -24,8 +24,8 @@ import numpy as np
 
 from kintsugi.export.hdf5 import Vocab
 from kintsugi.export.recorder import ACTION_NAMES, Episode
-from kintsugi.tasks.tabletop.arm_model import JOINTS
-from kintsugi.tasks.tabletop.config import ARMS
+from kintsugi.worlds.tabletop.arm_model import JOINTS
+from kintsugi.worlds.tabletop.config import ARMS
 
 CODEBASE_VERSION = "v2.1"
 CHUNK_SIZE = 1000
@@ -40,7 +40,7 @@ def _pyarrow() -> Any:
         import pyarrow as pa
         import pyarrow.parquet as pq
     except ImportError:
-        from kintsugi.errors import ConfigError
+        from kintsugi.core.errors import ConfigError
 
         raise ConfigError("--format lerobot needs pyarrow: pip install 'kintsugi[export]'") from None
     return pa, pq

@@ -27,9 +27,9 @@ from rich.errors import MarkupError
 from rich.text import Text
 from scipy.spatial.transform import Rotation
 
-from kintsugi.errors import KintsugiError
-from kintsugi.tasks.tabletop.arm_model import JOINTS
-from kintsugi.tasks.tabletop.config import ARMS
+from kintsugi.core.errors import KintsugiError
+from kintsugi.worlds.tabletop.arm_model import JOINTS
+from kintsugi.worlds.tabletop.config import ARMS
 
 STORY = re.compile(r"^\s*-?[\d.]+s (?:(?P<rec>recovery) )?(?P<edge>\S+): (?P<action>\w+) -> ")
 

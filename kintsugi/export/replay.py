@@ -12,9 +12,9 @@ import json
 import time
 from typing import Any
 
-from kintsugi.errors import ConfigError, KintsugiError
+from kintsugi.core.errors import ConfigError, KintsugiError
 from kintsugi.export.recorder import Episode, TrajectoryRecorder
-from kintsugi.trial import TrialRecord, TrialSpec
+from kintsugi.core.record import TrialRecord, TrialSpec
 
 
 class ReplayMismatch(KintsugiError):
@@ -70,15 +70,18 @@ def compare(stored: TrialRecord, again: TrialRecord) -> list[str]:
 
 def replay(spec: TrialSpec, stored: TrialRecord, fps: float) -> Episode:
     """Run `spec` again with a recorder attached; the episode, or ReplayMismatch / KintsugiError."""
-    from kintsugi.tasks import TASKS
+    from kintsugi.core.registry import TASKS
+    from kintsugi.core.runner import run_trial, split_overrides
 
     task = TASKS.get(spec.task).factory()
-    cfg = task.config(spec.overrides)
+    cfg = task.config(split_overrides(spec.overrides)[0])
     control_hz = 1.0 / cfg.sim.control_dt_s
     recorder = TrajectoryRecorder(frame_stride(control_hz, fps))
     start = time.perf_counter()
     try:
-        again = task.run(spec.model_copy(update={"video": None}), echo=recorder.echo, attach=recorder.attach)
+        again = run_trial(spec.model_copy(update={"video": None}), echo=recorder.echo, attach=recorder.attach)
+        if again.error:
+            raise KintsugiError(f"re-running {spec.key} failed: {again.error.splitlines()[0]}")
     except KintsugiError:
         raise
     except Exception as exc:  # noqa: BLE001 - one trial's crash is that trial's error, the export goes on

@@ -14,8 +14,8 @@ from __future__ import annotations
 import fnmatch
 from dataclasses import dataclass, field
 
-from kintsugi.errors import ConfigError
-from kintsugi.trial import TrialRecord
+from kintsugi.core.errors import ConfigError
+from kintsugi.core.record import TrialRecord
 
 FIELDS = ("task", "method", "variant", "condition", "key", "seed")
 FLAGS = ("recovered", "nominal", "success", "failed", "ok")

@@ -1,5 +1,2 @@
-"""Method registry: name -> factory(task_config, reasoner_settings) -> method object."""
-
-from kintsugi.registry import Registry
-
-METHODS: Registry = Registry("method")
+"""The methods: each package holds one paradigm with its typed settings, its reasoner roles, its
+figures and its tables. A method may run on any task whose robot it drives (its registry tag)."""

@@ -11,9 +11,10 @@ from typing import Any
 
 from rich.markup import escape
 
-from kintsugi.errors import ConfigError
-from kintsugi.methods import METHODS
-from kintsugi.trial import SkillLog, TrialLog
+from kintsugi.core.errors import ConfigError
+from kintsugi.core.registry import METHODS
+from kintsugi.core.record import SkillLog
+from kintsugi.core.log import TrialLog
 
 
 def _numbers(action: dict[str, Any]) -> dict[str, float]:
@@ -38,7 +39,7 @@ class Scripted:
     def run(self, robot: Any, log: TrialLog) -> bool:
         first = robot.observation(images=False)
         all_reached = True
-        from kintsugi.tasks.tabletop.task import expand
+        from kintsugi.worlds.tabletop.task import expand
 
         actions = (a for entry in self.ctx.task.script(first) for a in expand(entry, robot))
         for action in actions:
@@ -59,8 +60,8 @@ class Scripted:
 
 @METHODS.register("scripted", "fixed nominal atomic-action sequence per task, no checks, no recovery",
                   tags=("system-b",))
-def make_scripted(ctx: Any) -> Scripted:
-    from kintsugi.tasks.tabletop.context import TabletopContext
+def make_scripted(ctx: Any, settings: object = None) -> Scripted:
+    from kintsugi.worlds.tabletop.context import TabletopContext
 
     if not isinstance(ctx, TabletopContext):
         raise ConfigError("method 'scripted' runs the tabletop tasks (system B) only; "

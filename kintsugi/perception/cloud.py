@@ -16,7 +16,7 @@ from typing import NamedTuple
 import mujoco
 import numpy as np
 
-from kintsugi.errors import ConfigError, UnknownNameError
+from kintsugi.core.errors import ConfigError, UnknownNameError
 
 GEOM = int(mujoco.mjtObj.mjOBJ_GEOM)
 FLYING_TOL_M = 0.03

@@ -17,8 +17,8 @@ import cv2
 import numpy as np
 from pydantic import Field
 
-from kintsugi.config import StrictModel
-from kintsugi.errors import ConfigError
+from kintsugi.core.config import StrictModel
+from kintsugi.core.errors import ConfigError
 from kintsugi.perception.cloud import CameraModel, View, body_geom_ids, object_cloud, object_clouds
 from kintsugi.perception.render import SegDepthRenderer, render_view
 from kintsugi.perception.primitives import Fit, FitSettings, Primitive, fit_primitive, surface_samples

@@ -16,7 +16,7 @@ import numpy as np
 from pydantic import PositiveFloat, model_validator
 from scipy.optimize import least_squares
 
-from kintsugi.config import StrictModel
+from kintsugi.core.config import StrictModel
 from kintsugi.perception.sdf import box_sdf, box_tray_sdf, cylinder_cup_sdf, cylinder_sdf, sphere_sdf
 
 I3 = np.eye(3)

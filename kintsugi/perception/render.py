@@ -13,7 +13,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 
-from kintsugi.errors import ConfigError
+from kintsugi.core.errors import ConfigError
 from kintsugi.perception.cloud import CameraModel, View, camera_id
 
 

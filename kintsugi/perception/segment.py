@@ -8,7 +8,7 @@ Millimetres come from ``CameraCalibration.to_plane``: y grows to the right
 (u), z grows upward (against v).
 
 The colour thresholds and check tolerances (`PerceptionConfig`) are defined in
-`kintsugi.reasoning.types`, because reasoners are told them too.
+`kintsugi.methods.recovery.types`, because reasoners are told them too.
 """
 
 from __future__ import annotations
@@ -17,9 +17,9 @@ import cv2
 import numpy as np
 from pydantic import Field
 
-from kintsugi.config import StrictModel
+from kintsugi.core.config import StrictModel
 from kintsugi.perception.tilt import TiltMethod, estimate_tilt
-from kintsugi.reasoning.types import CameraCalibration, HsvRange, PerceptionConfig  # noqa: F401 - re-exported
+from kintsugi.methods.recovery.types import CameraCalibration, HsvRange, PerceptionConfig  # noqa: F401 - re-exported
 
 
 class Blob(StrictModel):

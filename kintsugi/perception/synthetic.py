@@ -12,8 +12,8 @@ import math
 import cv2
 import numpy as np
 
-from kintsugi.config import StrictModel
-from kintsugi.reasoning.types import CameraCalibration
+from kintsugi.core.config import StrictModel
+from kintsugi.methods.recovery.types import CameraCalibration
 
 SS = 4  # supersampling factor of the rasteriser
 

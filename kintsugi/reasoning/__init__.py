@@ -10,17 +10,17 @@ from __future__ import annotations
 import importlib
 from typing import TYPE_CHECKING, Callable
 
-from kintsugi.registry import Registry
+from kintsugi.core.registry import Registry
 
 if TYPE_CHECKING:
     from kintsugi.reasoning.base import Reasoner
-    from kintsugi.trial import ReasonerSettings
+    from kintsugi.core.record import ReasonerSettings
 
 ReasonerFactory = Callable[["ReasonerSettings"], "Reasoner"]
 
 REASONERS: Registry[ReasonerFactory] = Registry("reasoner")
 
-_BUILTIN_BACKENDS = ("kintsugi.reasoning.embedded", "kintsugi.reasoning.openai_backend")
+_BUILTIN_BACKENDS = ("kintsugi.methods.recovery.embedded", "kintsugi.reasoning.openai_backend")
 
 
 def load_builtin_backends() -> None:

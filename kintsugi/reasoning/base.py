@@ -14,8 +14,8 @@ from typing import Any, Callable, Protocol, TypeVar, runtime_checkable
 
 from pydantic import BaseModel
 
-from kintsugi.errors import ReasoningError
-from kintsugi.reasoning.types import (
+from kintsugi.core.errors import ReasoningError
+from kintsugi.methods.recovery.types import (
     AnalyzeReply,
     AnalyzeRequest,
     CallRecord,

@@ -14,7 +14,7 @@ import json
 import re
 from typing import Any
 
-from kintsugi.errors import ReasoningError
+from kintsugi.core.errors import ReasoningError
 
 MAX_CANDIDATES = 16
 """Brace groups tried before giving up; prose rarely holds more before the answer."""

@@ -22,7 +22,7 @@ from urllib.parse import urlparse
 from openai import OpenAI
 from pydantic import BaseModel
 
-from kintsugi.errors import ConfigError
+from kintsugi.core.errors import ConfigError
 from kintsugi.reasoning import REASONERS
 from kintsugi.reasoning.base import CallStats, redact
 from kintsugi.reasoning.jsontext import BadReply  # noqa: F401 - re-exported
@@ -35,7 +35,7 @@ from kintsugi.reasoning.structured import (  # noqa: F401 - EndpointError, stric
     ToolRoute,
     strict_schema,
 )
-from kintsugi.reasoning.types import (
+from kintsugi.methods.recovery.types import (
     AnalyzeReply,
     AnalyzeRequest,
     JudgeReply,
@@ -43,7 +43,7 @@ from kintsugi.reasoning.types import (
     PlanReply,
     PlanRequest,
 )
-from kintsugi.reasoning.validation import validate_analysis, validate_plan
+from kintsugi.methods.recovery.validation import validate_analysis, validate_plan
 
 OPENAI_HOST = "api.openai.com"
 DEFAULT_OPENAI_MODEL = "gpt-4o"

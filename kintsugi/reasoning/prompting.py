@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from pydantic import BaseModel
 
-from kintsugi.reasoning.types import RobotDescription
+from kintsugi.methods.recovery.types import RobotDescription
 
 
 def robot_section(request: BaseModel) -> str:

@@ -27,10 +27,10 @@ import openai
 from openai import OpenAI
 from pydantic import BaseModel, ValidationError
 
-from kintsugi.errors import ConfigError, ReasoningError
+from kintsugi.core.errors import ConfigError, ReasoningError
 from kintsugi.reasoning.base import CallStats
 from kintsugi.reasoning.jsontext import BadReply, extract_json_object, loads_object
-from kintsugi.reasoning.validation import describe_validation_error
+from kintsugi.methods.recovery.validation import describe_validation_error
 
 StructuredOutput = Literal["auto", "strict", "text"]
 Mode = Literal["strict", "text"]

@@ -26,7 +26,7 @@ from __future__ import annotations
 import ast
 from dataclasses import dataclass
 
-from kintsugi.errors import SandboxError
+from kintsugi.core.errors import SandboxError
 
 MAX_SOURCE_CHARS = 20_000
 MAX_NODES = 3_000

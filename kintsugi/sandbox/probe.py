@@ -19,7 +19,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from kintsugi.errors import SandboxError
+from kintsugi.core.errors import SandboxError
 from kintsugi.sandbox.program import CostProgram
 
 

@@ -16,7 +16,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from kintsugi.errors import SandboxError
+from kintsugi.core.errors import SandboxError
 from kintsugi.sandbox.language import CONSTANTS, FUNCTIONS, Signature, check, parse
 
 

@@ -6,8 +6,8 @@ from typing import Annotated
 
 from pydantic import ConfigDict, Field, StringConstraints
 
-from kintsugi.config import StrictModel
-from kintsugi.errors import KintsugiError
+from kintsugi.core.config import StrictModel
+from kintsugi.core.errors import KintsugiError
 
 
 class GraphError(KintsugiError):

@@ -13,13 +13,13 @@ from pydantic import ValidationError
 from kintsugi.methods.agentchord.domain import TABLETOP_DOMAIN
 from kintsugi.methods.agentchord.observe import seen_arms, seen_objects
 from kintsugi.methods.agentchord.vocab import tabletop_vocabulary
-from kintsugi.reasoning.arranger import ask_arrange
-from kintsugi.reasoning.composer import ask_compose
-from kintsugi.reasoning.symbolic import PlanningError
-from kintsugi.reasoning.taskgraph_types import ArrangerReply, ArrangerRequest, ComposerReply, ComposerRequest
+from kintsugi.methods.agentchord.arranger import ask_arrange
+from kintsugi.methods.agentchord.composer import ask_compose
+from kintsugi.methods.agentchord.symbolic import PlanningError
+from kintsugi.methods.agentchord.types import ArrangerReply, ArrangerRequest, ComposerReply, ComposerRequest
 from kintsugi.taskgraph.augment import RecoveryProposal, augment
 from kintsugi.taskgraph.forward import FilterResult, forward_filter
-from kintsugi.reasoning.validation import describe_validation_error
+from kintsugi.methods.recovery.validation import describe_validation_error
 from kintsugi.taskgraph.model import TaskGraph
 
 
@@ -89,8 +89,8 @@ def persistent_monitors(graph: TaskGraph, composed: ComposerReply) -> list[Recov
     each nominal edge (holding it, keeping it upright or lifted while carrying): ReKep's path constraints,
     compiled once."""
     from kintsugi.methods.agentchord.domain import TABLETOP_DOMAIN
-    from kintsugi.reasoning.composer import node_constraints
-    from kintsugi.reasoning.symbolic import parse_literals
+    from kintsugi.methods.agentchord.composer import node_constraints
+    from kintsugi.methods.agentchord.symbolic import parse_literals
 
     out = []
     for e in graph.edges:

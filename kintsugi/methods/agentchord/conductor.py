@@ -25,8 +25,8 @@ from typing import Any, Callable, Literal
 import numpy as np
 from rich.markup import escape
 
-from kintsugi.config import StrictModel
-from kintsugi.errors import KintsugiError
+from kintsugi.core.config import StrictModel
+from kintsugi.core.errors import KintsugiError
 from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes
 from kintsugi.methods.agentchord.observe import ARMS, features
 from kintsugi.methods.agentchord.synthesis import EdgeSynthesis
@@ -36,7 +36,8 @@ from kintsugi.taskgraph.features import Features
 from kintsugi.taskgraph.forward import cost_to_go, guarded_next_edge, next_edge
 from kintsugi.taskgraph.model import Edge, TaskGraph
 from kintsugi.taskgraph.monitor import Firing, MonitorBank
-from kintsugi.trial import SkillLog, TrialLog
+from kintsugi.core.record import SkillLog
+from kintsugi.core.log import TrialLog
 
 
 SETTLE_M = 0.0003

@@ -8,7 +8,7 @@ configured motion speeds, used for Eq. 8's cost-to-go.
 
 from __future__ import annotations
 
-from kintsugi.reasoning.taskgraph_types import Domain, OperatorSpec, PredicateSpec
+from kintsugi.methods.agentchord.types import Domain, OperatorSpec, PredicateSpec
 
 LIFT_M = 0.12
 POUR_SIDE_M = 0.10

@@ -14,7 +14,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from kintsugi.errors import KintsugiError
+from kintsugi.core.errors import KintsugiError
 from kintsugi.taskgraph.features import ArmState, Features
 from kintsugi.taskgraph.keyframe import Keyframe, solve_keyframe
 from kintsugi.taskgraph.model import Edge, Node
@@ -51,8 +51,8 @@ class TabletopKeyframes:
     """Solves and IK-checks keyframes for one trial's robot (its config's arms)."""
 
     def __init__(self, cfg: Any) -> None:
-        from kintsugi.tasks.tabletop.arm_model import base_position
-        from kintsugi.tasks.tabletop.ik import ArmIK
+        from kintsugi.worlds.tabletop.arm_model import base_position
+        from kintsugi.worlds.tabletop.ik import ArmIK
 
         self.cfg = cfg
         self.iks = {a: ArmIK(cfg.robot, cfg.motion, a) for a in ("left", "right")}
@@ -69,7 +69,7 @@ class TabletopKeyframes:
 
         `held`: object -> its centroid minus the grasp point (where it sits in the hand). Raises KeyframeError
         with the solver's or the IK's message when there is none."""
-        from kintsugi.tasks.tabletop.planning import Planner, rpy_matrix
+        from kintsugi.worlds.tabletop.planning import Planner, rpy_matrix
 
         act = edge.actions[0]
         arm, target = act.args["arm"], act.args["obj"]

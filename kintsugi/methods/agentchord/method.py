@@ -1,34 +1,48 @@
 """The `agentchord` method (system B): compile once (composer, arranger, Eq. 8, keyframes), then conduct
 with no reasoning calls at run time.
 
-Per-trial figures the issue names (episode_steps, modelled_execution_time_s, runtime_reasoning_calls,
-recovery_latency_steps) go in one `metrics` event as JSON, deterministic so equal seeds give equal records:
-a method cannot reach the record's `details` (the task's scorer fills it). `metrics_of(record)` adds the
-measured execution_time_s (sim time + the record's reasoning latency).
+Its per-trial figures (episode steps, modelled execution time, run-time reasoning calls, recovery latency)
+are the record's `method_figures` (`RunFigures`), deterministic so equal seeds give equal records;
+`metrics_of(record)` adds the measured execution time (sim time + the record's reasoning latency).
 """
 
 from __future__ import annotations
 
-import json
 import time
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
-from kintsugi.config import StrictModel
-from kintsugi.errors import ConfigError, KintsugiError
-from kintsugi.methods import METHODS
+from pydantic import Field
+
+from kintsugi.core.config import StrictModel
+from kintsugi.core.record import Figures
+from kintsugi.core.errors import ConfigError, KintsugiError
+from kintsugi.core.registry import METHODS
 from kintsugi.methods.agentchord.compile import compile_graph
 from kintsugi.methods.agentchord.conductor import Conductor, ConductorConfig
 from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes  # noqa: F401
-from kintsugi.trial import TrialLog
+from kintsugi.core.log import TrialLog
 
-LATENCY_MODEL_S = 5.0
-"""Stated per-call latency of a remote model, for the modelled execution time (the issue's default)."""
+class LatencySettings(StrictModel):
+    """`--set method.latency_model_s=...`: the stated latency behind the modelled execution time."""
+
+    latency_model_s: float = Field(default=5.0, ge=0)
+    """Stated per-call latency of a remote model, for the modelled execution time (not measured)."""
 
 
-class RunFigures(StrictModel):
-    """The `metrics` event of an agentchord trial: only deterministic figures (equal seeds, equal records)."""
+class AgentChordSettings(ConductorConfig, LatencySettings):
+    """`--set method.<key>=...` for AgentChord: the conductor's settings and the latency model."""
+
+
+class BacktrackSettings(AgentChordSettings):
+    """AC-BT and ReKep: on a firing, back to the latest nominal sub-goal that still holds."""
+
+    on_failure: Literal["branch", "backtrack"] = "backtrack"
+
+
+class RunFigures(Figures):
+    """An agentchord trial's own figures (`method_figures`): deterministic, so equal seeds give equal records."""
 
     episode_steps: int
     """Control steps spent in atomic actions (the paper's episode steps)."""
@@ -58,7 +72,7 @@ class AgentChord:
     """`arranger=False` compiles monitors from the nominal graph's persistent constraints instead (ReKep-style);
     `config.on_failure="backtrack"` backtracks instead of branching (AC-BT, ReKep-style)."""
 
-    def __init__(self, ctx: Any, config: ConductorConfig = ConductorConfig(), arranger: bool = True) -> None:
+    def __init__(self, ctx: Any, config: AgentChordSettings = AgentChordSettings(), arranger: bool = True) -> None:
         self.ctx = ctx
         self.config = config
         self.arranger = arranger
@@ -82,7 +96,8 @@ class AgentChord:
             log.event(robot.sim_time, "compiled", f"{len(g.nodes)} nodes, {len(g.edges)} edges, "
                       f"{len(g.monitors())} monitors, {len(compiled.result.kept)} recovery branches kept "
                       f"({len(compiled.result.rejected)} dropped by Eq. 8)")
-            conductor = Conductor(g, robot, keyframes, log, steps_per_tick, compiled_kf, self.config,
+            conductor = Conductor(g, robot, keyframes, log, steps_per_tick, compiled_kf,
+                                  ConductorConfig(**self.config.model_dump(include=set(ConductorConfig.model_fields))),
                                   seen=first.objects)
             conductor.tops.observe(first.objects)
             conductor.heads.seed(first.objects)
@@ -90,15 +105,16 @@ class AgentChord:
                 ok = conductor.run()
             finally:
                 m = conductor.metrics
+                latency = self.config.latency_model_s
                 runtime_calls = len(reasoner.records) - planning_calls
                 metrics = RunFigures(
                     episode_steps=m.episode_steps,
-                    modelled_execution_time_s=round(robot.sim_time + len(reasoner.records) * LATENCY_MODEL_S, 4),
-                    latency_model_s=LATENCY_MODEL_S, planning_reasoning_calls=planning_calls,
+                    modelled_execution_time_s=round(robot.sim_time + len(reasoner.records) * latency, 4),
+                    latency_model_s=latency, planning_reasoning_calls=planning_calls,
                     runtime_reasoning_calls=runtime_calls, recovery_latency_steps=m.recovery_latency_steps,
                     recoveries=m.recoveries, actions=m.actions,
                     graph_nodes=len(g.nodes), graph_edges=len(g.edges), monitors=len(g.monitors()))
-                log.event(robot.sim_time, "metrics", metrics.model_dump_json())
+                log.figures(metrics)
             return ok
         finally:
             log.transcript.extend(r.model_dump(mode="json") for r in reasoner.records)
@@ -108,7 +124,7 @@ class AgentChord:
         """Keyframes of the nominal free moves from the first observation, a held object (by the composer's
         node facts) predicted at the grasp point, where a side grasp closes; an infeasible keyframe fails the
         trial before anything moves, with the solver's message."""
-        from kintsugi.reasoning.taskgraph_types import parse_atom
+        from kintsugi.methods.agentchord.types import parse_atom
 
         out = {}
         graph = compiled.graph
@@ -127,16 +143,16 @@ class AgentChord:
 
 
 def metrics_of(record: Any) -> AgentChordMetrics | None:
-    """The issue's figures of an agentchord trial record (None if it has no metrics event)."""
-    for e in record.events:
-        if e.kind == "metrics":
-            return AgentChordMetrics(**json.loads(e.detail),
-                                     execution_time_s=round(record.sim_time + record.reasoning_latency_s, 4))
-    return None
+    """An agentchord-family trial's figures with its measured execution time (None for other methods)."""
+    figures = RunFigures.of(record)
+    if figures is None:
+        return None
+    return AgentChordMetrics(**figures.model_dump(),
+                             execution_time_s=round(record.sim_time + record.reasoning_latency_s, 4))
 
 
 def _tabletop(ctx: Any, name: str) -> None:
-    from kintsugi.tasks.tabletop.context import TabletopContext
+    from kintsugi.worlds.tabletop.context import TabletopContext
 
     if not isinstance(ctx, TabletopContext):
         raise ConfigError(f"method {name!r} runs the tabletop tasks (system B) only")
@@ -144,25 +160,26 @@ def _tabletop(ctx: Any, name: str) -> None:
 
 @METHODS.register("agentchord", "AgentChord: composer + arranger compile a recovery-augmented task graph once; "
                   "the conductor runs it with monitors and pre-compiled forward recovery, no run-time reasoning",
-                  tags=("system-b",))
-def make_agentchord(ctx: Any) -> AgentChord:
+                  tags=("system-b",), config=AgentChordSettings)
+def make_agentchord(ctx: Any, settings: AgentChordSettings) -> AgentChord:
     _tabletop(ctx, "agentchord")
-    return AgentChord(ctx)
+    return AgentChord(ctx, settings)
 
 
 @METHODS.register("agentchord-bt", "AgentChord's graph and monitors, but on a firing it backtracks to the latest "
                   "nominal sub-goal that still holds and re-runs the nominal edges (paper's AC-BT ablation)",
-                  tags=("system-b",))
-def make_agentchord_bt(ctx: Any) -> AgentChord:
+                  tags=("system-b",), config=BacktrackSettings)
+def make_agentchord_bt(ctx: Any, settings: BacktrackSettings) -> AgentChord:
     _tabletop(ctx, "agentchord-bt")
-    return AgentChord(ctx, ConductorConfig(on_failure="backtrack"))
+    return AgentChord(ctx, settings)
 
 
 @METHODS.register("rekep", "ReKep-style: one planning call, the nominal graph's constraints compiled once as "
-                  "path monitors (no anticipated failure modes), backtrack on a violation", tags=("system-b",))
-def make_rekep(ctx: Any) -> AgentChord:
+                  "path monitors (no anticipated failure modes), backtrack on a violation", tags=("system-b",),
+                  config=BacktrackSettings)
+def make_rekep(ctx: Any, settings: BacktrackSettings) -> AgentChord:
     _tabletop(ctx, "rekep")
-    return AgentChord(ctx, ConductorConfig(on_failure="backtrack"), arranger=False)
+    return AgentChord(ctx, settings, arranger=False)
 
 
 __all__ = ["AgentChord", "AgentChordMetrics", "KeyframeError", "KintsugiError", "metrics_of"]

@@ -9,7 +9,7 @@ from typing import Any, Iterable, Mapping
 
 import numpy as np
 
-from kintsugi.reasoning.taskgraph_types import SeenArm, SeenObject
+from kintsugi.methods.agentchord.types import SeenArm, SeenObject
 from kintsugi.taskgraph.features import ArmState, Features
 
 ARMS = ("left", "right")

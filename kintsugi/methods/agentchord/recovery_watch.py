@@ -14,7 +14,7 @@ from __future__ import annotations
 from typing import Any
 
 from kintsugi.methods.agentchord.observe import ARMS
-from kintsugi.reasoning.arranger import arm_calls
+from kintsugi.methods.agentchord.arranger import arm_calls
 from kintsugi.taskgraph.model import Edge, Node
 
 LOSS_WINDOW = 3

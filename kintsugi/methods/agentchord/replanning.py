@@ -18,28 +18,29 @@ from __future__ import annotations
 import functools
 from typing import Any, Literal
 
-from kintsugi.errors import ConfigError
-from kintsugi.methods import METHODS
+from kintsugi.core.errors import ConfigError
+from kintsugi.core.registry import METHODS
 from kintsugi.methods.agentchord.compile import compile_graph, persistent_monitors
 from kintsugi.methods.agentchord.conductor import Conductor, ConductorConfig, Metrics, firing_arm
 from kintsugi.methods.agentchord.keyframes import TabletopKeyframes
-from kintsugi.methods.agentchord.method import LATENCY_MODEL_S, RunFigures
+from kintsugi.methods.agentchord.method import LatencySettings, RunFigures
 from kintsugi.methods.agentchord.observe import seen_arms, seen_objects
 from kintsugi.methods.agentchord.tops import Heads, Tops
-from kintsugi.reasoning.composer import GoalHolds
-from kintsugi.reasoning.taskgraph_types import VerifyRequest
-from kintsugi.reasoning.verifier import ask_verify
+from kintsugi.methods.agentchord.composer import GoalHolds
+from kintsugi.methods.agentchord.types import VerifyRequest
+from kintsugi.methods.agentchord.verifier import ask_verify
 from kintsugi.taskgraph.model import Edge, TaskGraph
-from kintsugi.trial import TrialLog
+from kintsugi.core.log import TrialLog
 
 Style = Literal["inner-monologue", "doremi", "code-as-monitor"]
 MAX_REPLANS = 6
 
 
 class Replanning:
-    def __init__(self, ctx: Any, style: Style) -> None:
+    def __init__(self, ctx: Any, style: Style, settings: LatencySettings | None = None) -> None:
         self.ctx = ctx
         self.style = style
+        self.settings = settings or LatencySettings()
 
     def run(self, robot: Any, log: TrialLog) -> bool:
         from kintsugi.reasoning import make_reasoner
@@ -89,13 +90,14 @@ class Replanning:
             return ok
         finally:
             runtime = len(self.reasoner.records) - planning_calls
+            latency = self.settings.latency_model_s
             figures = RunFigures(
                 episode_steps=metrics.episode_steps,
-                modelled_execution_time_s=round(robot.sim_time + len(self.reasoner.records) * LATENCY_MODEL_S, 4),
-                latency_model_s=LATENCY_MODEL_S, planning_reasoning_calls=planning_calls,
+                modelled_execution_time_s=round(robot.sim_time + len(self.reasoner.records) * latency, 4),
+                latency_model_s=latency, planning_reasoning_calls=planning_calls,
                 runtime_reasoning_calls=runtime, recovery_latency_steps=metrics.recovery_latency_steps,
                 recoveries=metrics.recoveries, actions=metrics.actions, graph_nodes=0, graph_edges=0, monitors=0)
-            log.event(robot.sim_time, "metrics", figures.model_dump_json())
+            log.figures(figures)
             log.transcript.extend(r.model_dump(mode="json") for r in self.reasoner.records)
 
     def _plan(self, first: bool) -> tuple[TaskGraph, Any]:
@@ -151,7 +153,7 @@ class Replanning:
         m.fired_at = fired_at
 
     def _remember(self, node: str) -> None:
-        from kintsugi.reasoning.taskgraph_types import parse_atom
+        from kintsugi.methods.agentchord.types import parse_atom
 
         lasting = _lasting_unseen()
         facts = set(self.node_facts.get(node, []))
@@ -185,21 +187,22 @@ class Replanning:
 
 
 def _factory(style: Style):  # noqa: ANN202
-    def make(ctx: Any) -> Replanning:
-        from kintsugi.tasks.tabletop.context import TabletopContext
+    def make(ctx: Any, settings: LatencySettings | None = None) -> Replanning:
+        from kintsugi.worlds.tabletop.context import TabletopContext
 
         if not isinstance(ctx, TabletopContext):
             raise ConfigError(f"method {style!r} runs the tabletop tasks (system B) only")
-        return Replanning(ctx, style)
+        return Replanning(ctx, style, settings)
     return make
 
 
 METHODS.register("inner-monologue", "the reasoner verifies every sub-goal and re-plans (composer) on a failure; "
-                 "no compiled monitors", tags=("system-b",))(_factory("inner-monologue"))
+                 "no compiled monitors", tags=("system-b",), config=LatencySettings)(_factory("inner-monologue"))
 METHODS.register("doremi", "the reasoner verifies the held objects' conditions after every atomic action and "
-                 "every sub-goal, re-plans on a failure", tags=("system-b",))(_factory("doremi"))
+                 "every sub-goal, re-plans on a failure", tags=("system-b",), config=LatencySettings)(_factory("doremi"))
 METHODS.register("code-as-monitor", "the arranger's monitors compiled once (detect only); the reasoner verifies "
-                 "every sub-goal and re-plans on a firing or a failed check", tags=("system-b",))(_factory("code-as-monitor"))
+                 "every sub-goal and re-plans on a firing or a failed check", tags=("system-b",),
+                 config=LatencySettings)(_factory("code-as-monitor"))
 
 
 @functools.cache
@@ -209,7 +212,7 @@ def _lasting_unseen() -> frozenset[str]:
     out of the goal of a re-plan after the tray fell from both hands, and the plan ended with both hands still
     on the tray (DoReMi and code-as-monitor, coffee-tray seed 0)."""
     from kintsugi.methods.agentchord.domain import TABLETOP_DOMAIN
-    from kintsugi.reasoning.taskgraph_types import parse_atom
+    from kintsugi.methods.agentchord.types import parse_atom
 
     undone = {parse_atom(d)[1] for op in TABLETOP_DOMAIN.operators for d in op.delete}
     return frozenset(p.name for p in TABLETOP_DOMAIN.predicates if not p.constraints and p.name not in undone)

@@ -8,7 +8,7 @@ from rich.console import Console
 from rich.markup import escape
 from rich.table import Table
 
-from kintsugi.errors import ConfigError
+from kintsugi.core.errors import ConfigError
 from kintsugi.methods.agentchord.compile import Compiled, compile_graph
 
 
@@ -16,10 +16,11 @@ def compile_for_task(task: str, condition: str, seed: int, overrides: dict, sett
     """Build the task's world for (condition, seed), take the first observation, compile (composer, arranger)."""
     from kintsugi.reasoning import make_reasoner
     from kintsugi.reasoning.base import RecordingReasoner
-    from kintsugi.tasks import TASKS, load_all
-    from kintsugi.tasks.tabletop.robot import TabletopRobot
+    from kintsugi.core.plugins import load_builtins
+    from kintsugi.core.registry import TASKS
+    from kintsugi.worlds.tabletop.robot import TabletopRobot
 
-    load_all()
+    load_builtins()
     t = TASKS.get(task).factory()
     if not hasattr(t, "spec") or "system-b" not in TASKS.get(task).tags:
         known = ", ".join(e.name for e in TASKS if "system-b" in e.tags)

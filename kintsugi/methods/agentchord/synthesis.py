@@ -12,7 +12,7 @@ from kintsugi.methods.agentchord.keyframes import TabletopKeyframes
 from kintsugi.methods.agentchord.observe import ARMS
 from kintsugi.methods.agentchord.tops import Heads, Tops
 from kintsugi.taskgraph.model import Edge, TaskGraph
-from kintsugi.tasks.tabletop.clearance import across, gap
+from kintsugi.worlds.tabletop.clearance import across, gap
 
 GRASP_Z_MIN_M = 0.029
 """A top-down grasp point is no lower than this (the pads' half length plus the table clearance)."""
@@ -137,8 +137,8 @@ class EdgeSynthesis:
     def _turn_margin(self, arm: str, q: np.ndarray, pos: np.ndarray, rot: np.ndarray, goal: np.ndarray) -> float:
         """How far inside its limits (degrees, the tightest joint) the arm ends a straight turn of the hand from
         `rot` to `goal` about `pos`, starting from joints `q`; -inf when it cannot follow it on its branch."""
-        from kintsugi.errors import KintsugiError
-        from kintsugi.tasks.tabletop.planning import BRANCH_JUMP_DEG, Planner
+        from kintsugi.core.errors import KintsugiError
+        from kintsugi.worlds.tabletop.planning import BRANCH_JUMP_DEG, Planner
 
         ik = self.keyframes.iks[arm]
         try:
@@ -162,7 +162,7 @@ class EdgeSynthesis:
         from kintsugi.methods.agentchord.domain import UPEND_LIFT_M
         from kintsugi.methods.agentchord.tops import upright_hand
         from kintsugi.taskgraph.constraints import wrap_deg
-        from kintsugi.tasks.tabletop.planning import down_rotation
+        from kintsugi.worlds.tabletop.planning import down_rotation
 
         arm, obj = call["arm"], call["obj"]
         turns_up = any(a.name == "rotate_eef" and a.args.get("axis") == "closing" for a in edge.actions)
@@ -263,7 +263,7 @@ class EdgeSynthesis:
         faces away from the arm's base) whose fingers clear them most, among those the arm reaches (IK of the
         pre-grasp and grasp poses, checked before moving). Only perceived geometry is read."""
         from kintsugi.methods.agentchord.domain import LIFT_M, UPEND_LIFT_M
-        from kintsugi.tasks.tabletop.planning import side_rotation
+        from kintsugi.worlds.tabletop.planning import side_rotation
 
         arm, obj = call["arm"], call["obj"]
         if self.missed.get((arm, obj), 0) % 2 == 1:

@@ -14,7 +14,7 @@ FEATURES = frozenset({"centroid", "axis", "n_points", "extent", "top", "bottom",
 
 
 def _checker(name: str, objects: Sequence[str]) -> Callable[[dict[str, Any]], None]:
-    from kintsugi.tasks.tabletop.actions import parse_action
+    from kintsugi.worlds.tabletop.actions import parse_action
 
     def check(args: dict[str, Any]) -> None:
         if "action" in args:
@@ -25,7 +25,7 @@ def _checker(name: str, objects: Sequence[str]) -> Callable[[dict[str, Any]], No
 
 
 def tabletop_vocabulary(objects: Sequence[str]) -> Vocabulary:
-    from kintsugi.tasks.tabletop.actions import ACTION_NAMES
+    from kintsugi.worlds.tabletop.actions import ACTION_NAMES
 
     return Vocabulary(actions={n: _checker(n, objects) for n in ACTION_NAMES}, objects=frozenset(objects),
                       features=FEATURES)

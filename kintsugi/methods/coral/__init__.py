@@ -4,14 +4,14 @@ from __future__ import annotations
 
 from typing import Any
 
-from kintsugi.methods import METHODS
+from kintsugi.core.registry import METHODS
 
 TAGS = ("system-c",)
 
 
 def _make(name: str) -> Any:
-    def make(ctx: Any) -> Any:
-        from kintsugi.methods.contact import _check
+    def make(ctx: Any, settings: object = None) -> Any:
+        from kintsugi.methods.expert.method import _check
         from kintsugi.methods.coral.method import VARIANTS, Coral
 
         _check(ctx, name)

@@ -1,6 +1,6 @@
 """The variables cost code reads, computed from a rollout batch or from one measured state.
 
-Names and meanings are `kintsugi.reasoning.formulate.variable_docs`; this module is their one
+Names and meanings are `kintsugi.methods.coral.formulate.variable_docs`; this module is their one
 implementation for the control loop. Rollout variables are computed lazily (only what a
 stage's function takes) and once per planning step. Nothing here reads the evaluation world:
 rollouts come from the planning world, states from the robot's `Observation`.
@@ -13,10 +13,10 @@ from typing import Any, Callable, Iterator
 
 import numpy as np
 
-from kintsugi.tasks.contact.costs import EPS, Attractor, View
-from kintsugi.tasks.contact.robot import Observation
-from kintsugi.tasks.contact.objects import Geometry
-from kintsugi.tasks.contact.world import Scene, up_axis, yaw_of
+from kintsugi.methods.mppi.costs import EPS, Attractor, View
+from kintsugi.worlds.contact.robot import Observation
+from kintsugi.worlds.contact.objects import Geometry
+from kintsugi.worlds.contact.world import Scene, up_axis, yaw_of
 
 
 def static_env(scene: Scene, cfg: Any) -> dict[str, np.ndarray]:

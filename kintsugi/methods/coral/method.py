@@ -25,8 +25,9 @@ from typing import Any
 
 import numpy as np
 
-from kintsugi.errors import KintsugiError, ReasoningError
-from kintsugi.trial import TrialLog
+from kintsugi.core.errors import KintsugiError, ReasoningError
+from kintsugi.core.log import TrialLog
+from kintsugi.core.record import Figures
 
 
 def probe_limits() -> Any:
@@ -39,9 +40,21 @@ def probe_limits() -> Any:
 
 def object_views(known: Any) -> list[Any]:
     """What the priors role is told of each object: its label and the size of its known model."""
-    from kintsugi.reasoning.coral_types import ObjectView
+    from kintsugi.methods.coral.types import ObjectView
 
     return [ObjectView(label=n, size_m=tuple(2 * h for h in g.parts[0].half)) for n, g in known.geometry.items()]
+
+
+class CoralFigures(Figures):
+    """A CoRAL-family trial's own figures (`method_figures`): where its priors and cost came from, and
+    per attempt the beliefs it planned with, the cost code, the stages, the adaptation and the timings."""
+
+    variant: str
+    priors: dict[str, dict[str, Any]] = {}
+    plan_from: str | None = None
+    """`formulation` or `memory`."""
+    memory: dict[str, Any] | None = None
+    attempts: list[dict[str, Any]] = []
 
 
 @dataclass(frozen=True)
@@ -72,10 +85,10 @@ class Coral:
 
     # --- building the requests --------------------------------------------------------------------------------
     def scene_request(self, obs: Any, priors: dict[str, Any]) -> Any:
-        from kintsugi.reasoning.coral_types import FixtureView, FormulationRequest, MarkerView, ObjectState, RobotView
-        from kintsugi.reasoning.formulate import variable_docs
+        from kintsugi.methods.coral.types import FixtureView, FormulationRequest, MarkerView, ObjectState, RobotView
+        from kintsugi.methods.coral.formulate import variable_docs
         from kintsugi.sandbox import FUNCTIONS
-        from kintsugi.tasks.contact.world import tilt_deg, yaw_of
+        from kintsugi.worlds.contact.world import tilt_deg, yaw_of
 
         ctx, cfg, scene = self.ctx, self.ctx.cfg, self.ctx.known
         objects = []
@@ -106,17 +119,18 @@ class Coral:
             return self._run(robot, log, reasoner)
         finally:
             log.transcript.extend(r.model_dump(mode="json") for r in reasoner.records)
+            log.figures(CoralFigures(**self.info, attempts=self.attempts))
 
     def _steps(self) -> tuple[int, int]:
         c = self.ctx.cfg.control
         return c.samples, max(1, round(c.horizon_s / self.ctx.cfg.sim.planning_timestep_s))
 
     def _run(self, robot: Any, log: TrialLog, reasoner: Any) -> bool:
-        from kintsugi.reasoning.coral_types import PriorsRequest
-        from kintsugi.reasoning.formulate import ask_formulation
-        from kintsugi.reasoning.priors import ask_priors
-        from kintsugi.tasks.contact.objects import Physics
-        from kintsugi.tasks.contact.world import PlanningWorld
+        from kintsugi.methods.coral.types import PriorsRequest
+        from kintsugi.methods.coral.formulate import ask_formulation
+        from kintsugi.methods.coral.priors import ask_priors
+        from kintsugi.worlds.contact.objects import Physics
+        from kintsugi.worlds.contact.world import PlanningWorld
 
         ctx, cfg = self.ctx, self.ctx.cfg
         obs = robot.observe()
@@ -178,7 +192,7 @@ class Coral:
     def _attempt(self, robot: Any, log: TrialLog, plan: Any, program: Any, planning: Any, attempt: int):  # noqa: ANN202
         from kintsugi.methods.coral.env import first_env
         from kintsugi.methods.coral.stages import CodeTiming, CostCodeError, build_stages
-        from kintsugi.tasks.contact.execute import run_attempt
+        from kintsugi.methods.mppi.execute import run_attempt
 
         timing = CodeTiming()
         factories = build_stages(plan, program, self.ctx.known, self.ctx.cfg, self.ctx.seed + 1000 * attempt, timing,
@@ -192,15 +206,15 @@ class Coral:
         return result, trace, timing, None
 
     def _fitter(self, planning: Any) -> Any:
-        from kintsugi.tasks.contact.identify import BeliefFitter
+        from kintsugi.methods.mppi.identify import BeliefFitter
 
         s = self.ctx.cfg.sysid
         return BeliefFitter(planning, self.ctx.task.target, s.mass_bounds_kg, s.friction_bounds)
 
     def _sysid(self, fitter: Any, exec_log: Any, beliefs: dict, planning: Any, log: TrialLog) -> Any:
         """Fit the target's mass and friction on every logged window so far (a tool the adaptation role reads)."""
-        from kintsugi.reasoning.coral_types import SysIdSummary
-        from kintsugi.tasks.contact.objects import Physics
+        from kintsugi.methods.coral.types import SysIdSummary
+        from kintsugi.worlds.contact.objects import Physics
 
         obj = self.ctx.task.target
         added = fitter.add(exec_log)
@@ -218,8 +232,8 @@ class Coral:
                             loss_fit=fit.loss, windows=len(fitter.logs))
 
     def _history(self, attempt: int, result: Any, trace: Any, exec_log: Any, error: str | None) -> Any:
-        from kintsugi.reasoning.coral_types import AttemptHistory, StageOutcome
-        from kintsugi.tasks.contact.world import tilt_deg
+        from kintsugi.methods.coral.types import AttemptHistory, StageOutcome
+        from kintsugi.worlds.contact.world import tilt_deg
 
         stages, failed = [], None
         for tr in (result.stages if result is not None else []):
@@ -251,9 +265,9 @@ class Coral:
 
     def _adapt(self, reasoner: Any, req: Any, beliefs: dict, plan: Any, program: Any, history: Any, sysid: Any,
                planning: Any, samples: int, steps: int, log: TrialLog, record: dict) -> tuple[dict, Any, Any]:
-        from kintsugi.reasoning.adapt import ask_adaptation
-        from kintsugi.reasoning.coral_types import AdaptRequest
-        from kintsugi.tasks.contact.objects import Physics
+        from kintsugi.methods.coral.adapt import ask_adaptation
+        from kintsugi.methods.coral.types import AdaptRequest
+        from kintsugi.worlds.contact.objects import Physics
 
         past = [h for h in (a.get("history") for a in self.attempts) if h]
         record["history"] = history.model_dump()
@@ -281,14 +295,14 @@ class Coral:
         path = self.ctx.cfg.coral.memory_path
         if not self.variant.memory or not path:
             return None
-        from kintsugi.memory.store import EpisodeMemory
+        from kintsugi.methods.coral.memory.store import EpisodeMemory
 
         return EpisodeMemory(path)
 
     def _recall(self, memory: Any, req: Any, beliefs: dict, samples: int, steps: int, log: TrialLog, t: float
                 ) -> tuple[Any, Any, dict]:
-        from kintsugi.reasoning.coral_types import FormulationReply, ObjectView, StageSpec
-        from kintsugi.reasoning.formulate import check_formulation
+        from kintsugi.methods.coral.types import FormulationReply, ObjectView, StageSpec
+        from kintsugi.methods.coral.formulate import check_formulation
         from kintsugi.reasoning.jsontext import BadReply
 
         views = [ObjectView(label=o.name, size_m=o.size_m) for o in req.objects]
@@ -318,8 +332,8 @@ class Coral:
     def _remember(self, memory: Any, req: Any, beliefs: dict, plan: Any) -> None:
         if memory is None:
             return
-        from kintsugi.memory.store import Episode
-        from kintsugi.reasoning.coral_types import ObjectView
+        from kintsugi.methods.coral.memory.store import Episode
+        from kintsugi.methods.coral.types import ObjectView
 
         memory.add(Episode(task=self.ctx.task.name, instruction=req.task,
                            objects=[ObjectView(label=o.name, size_m=o.size_m) for o in req.objects],
@@ -328,9 +342,6 @@ class Coral:
                                              "stages": [s.model_dump() for s in plan.stages],
                                              "knobs": plan.knobs})))
         memory.close()
-
-    def summary(self) -> dict[str, Any]:
-        return {**self.info, "attempts": self.attempts}
 
 
 def stressed(beliefs: dict[str, Any], coral: Any) -> tuple[dict[str, Any], str | None]:
@@ -348,7 +359,7 @@ def _transfer(stored: Any, prior_now: Any, prior_then: dict | None) -> Any:
     refined; mass carries over as the refinement's correction of that episode's prior (the same material, another
     size: the prior scales with the box's volume, a remembered absolute mass would not). An episode stored without
     its priors gives its beliefs as they are."""
-    from kintsugi.reasoning.coral_types import ObjectPrior
+    from kintsugi.methods.coral.types import ObjectPrior
 
     out = ObjectPrior.model_validate(stored.model_dump())
     try:

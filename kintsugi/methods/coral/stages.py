@@ -19,14 +19,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from kintsugi.control import ForceFeedbackConfig, force_feedback
-from kintsugi.errors import KintsugiError, SandboxError
+from kintsugi.core.errors import KintsugiError, SandboxError
 from kintsugi.methods.coral.env import entry_env, rollout_env, state_env, static_env
-from kintsugi.reasoning.coral_types import FormulationReply, StageSpec, seed_functions
+from kintsugi.methods.coral.types import FormulationReply, StageSpec, seed_functions
 from kintsugi.sandbox import CostProgram
-from kintsugi.tasks.contact.costs import Attractor, ContactRegion, View, total
-from kintsugi.tasks.contact.fsm import Stage, StageFactory
-from kintsugi.tasks.contact.robot import Observation
-from kintsugi.tasks.contact.world import Scene
+from kintsugi.methods.mppi.costs import Attractor, ContactRegion, View, total
+from kintsugi.methods.mppi.fsm import Stage, StageFactory
+from kintsugi.worlds.contact.robot import Observation
+from kintsugi.worlds.contact.world import Scene
 
 FB_GAIN = 0.6
 """Eq. 5 gain as a fraction of the servo's compliance (1 / kp): metres of command per newton of error."""

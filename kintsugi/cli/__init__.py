@@ -1,0 +1,398 @@
+"""Command line: run one trial, run a campaign, list what is registered, explain a trial."""
+
+from __future__ import annotations
+
+import re
+import traceback
+from pathlib import Path
+from typing import Annotated, Literal, Optional
+
+import typer
+from rich.console import Console
+from rich.errors import MarkupError
+from rich.markup import escape
+from rich.table import Table
+
+from kintsugi.core.errors import KintsugiError
+
+app = typer.Typer(add_completion=False, no_args_is_help=True,
+                  help="kintsugi: resilient robot manipulation with reasoned checks and recovery, on MuJoCo.")
+# soft_wrap: piped output (CI, log files) must not be hard-wrapped at 80 columns.
+console = Console(soft_wrap=True)
+err_console = Console(stderr=True, soft_wrap=True)
+
+SetOpt = Annotated[Optional[list[str]], typer.Option("--set", help="config override key.path=value (repeatable)")]
+ReasonerOpt = Annotated[str, typer.Option(help="reasoner backend: embedded (offline) or openai")]
+ModelOpt = Annotated[Optional[str], typer.Option(help="model name for the openai backend")]
+BaseUrlOpt = Annotated[Optional[str], typer.Option(help="OpenAI-compatible endpoint (vLLM, Ollama, llama.cpp)")]
+KeyEnvOpt = Annotated[str, typer.Option(help="environment variable holding the API key")]
+StructuredOpt = Annotated[Literal["auto", "strict", "text"], typer.Option(
+    help="openai reply format: strict (server-enforced JSON schema / tool calls), text (JSON asked for in the "
+         "prompt, parsed tolerantly), auto (strict until the server refuses it, then text)")]
+
+
+def _version(value: bool) -> None:
+    if value:
+        from importlib.metadata import PackageNotFoundError, version
+
+        try:
+            number = version("kintsugi")
+        except PackageNotFoundError:  # running from a source tree that was never installed
+            import kintsugi
+
+            number = kintsugi.__version__
+        console.print(f"kintsugi {number}", highlight=False)
+        raise typer.Exit()
+
+
+@app.callback()
+def _main(
+    version: Annotated[bool, typer.Option("--version", callback=_version, is_eager=True,
+                                          help="print the installed version and exit")] = False,
+) -> None:
+    """kintsugi: resilient robot manipulation with reasoned checks and recovery, on MuJoCo."""
+
+
+def _csv(text: str) -> list[str]:
+    return [x.strip() for x in text.split(",") if x.strip()]
+
+
+def _reasoner(backend: str, model: str | None, base_url: str | None, key_env: str,  # noqa: ANN202
+              structured_output: str = "auto"):
+    from kintsugi.core.record import ReasonerSettings
+
+    return ReasonerSettings(backend=backend, model=model, base_url=base_url, api_key_env=key_env,
+                            structured_output=structured_output)
+
+
+def _overrides(sets: list[str] | None) -> dict:
+    """Parse `--set key.path=value`; campaign validation checks them against the task's typed config."""
+    from kintsugi.core.config import parse_override
+
+    return dict((".".join(k), v) for k, v in (parse_override(s) for s in sets or []))
+
+
+def _fail(exc: Exception | str, code: int = 2) -> None:
+    """One line on stderr naming the problem, then a non-zero exit (2: bad input, 1: a trial failed to run)."""
+    err_console.print(f"[bold red]error:[/bold red] {escape(str(exc))}")
+    raise typer.Exit(code=code)
+
+
+def _echo(text: str) -> None:
+    """Print one line of a trial's story; a line that is not valid markup is shown verbatim, never fatal."""
+    try:
+        console.print(text)
+    except MarkupError:
+        console.print(escape(text))
+
+
+def _record_path(spec) -> Path:  # noqa: ANN001 - a TrialSpec
+    """runs/<task>__<method>__<variant>__<condition>__<seed>__<reasoner>.json: another reasoner
+    (or model) never overwrites the record of the same trial."""
+    r = spec.reasoner
+    model = r.model
+    if model is None and r.backend == "openai":
+        from kintsugi.reasoning.openai_backend import DEFAULT_OPENAI_MODEL
+
+        model = DEFAULT_OPENAI_MODEL
+    who = re.sub(r"[^A-Za-z0-9._+-]+", "-", r.backend + (f"-{model}" if model else ""))
+    return Path("runs") / f"{spec.key.replace('/', '__')}__{who}.json"
+
+
+@app.command()
+def run(
+    task: Annotated[str, typer.Argument(help="registered task, see `kintsugi tasks`")],
+    method: Annotated[Optional[str], typer.Option(
+        help="registered method, see `kintsugi methods` [default: the task's reference method]")] = None,
+    shape: Annotated[Optional[str], typer.Option(
+        "--shape", "--variant", help="task variant, e.g. a peg shape [default: the task's first]")] = None,
+    condition: Annotated[str, typer.Option(help="condition, see `kintsugi tasks` (e.g. none, pose, all)")] = "none",
+    seed: Annotated[int, typer.Option(min=0, help="seed of the condition's random draws (hole offset, grasp "
+                                                  "angle, friction); the same seed gives the same trial")] = 0,
+    video: Annotated[Optional[Path], typer.Option(help="write an .mp4 or .gif of the scene camera")] = None,
+    record: Annotated[Optional[Path], typer.Option(
+        help="trial record .json (default: runs/<key, / as __>__<reasoner>.json)")
+    ] = None,
+    set_: SetOpt = None,
+    reasoner: ReasonerOpt = "embedded",
+    model: ModelOpt = None,
+    base_url: BaseUrlOpt = None,
+    api_key_env: KeyEnvOpt = "OPENAI_API_KEY",
+    structured_output: StructuredOpt = "auto",
+) -> None:
+    """Run one trial, tell its story skill by skill, and save its record (and video).
+
+    Exits 1 when the trial recorded an error (e.g. an unreachable endpoint); the record is saved first.
+    """
+    from kintsugi.campaign.plan import build_config, expand, task_defaults
+    from kintsugi.campaign.runner import first_line
+    from kintsugi.core.outputs import check_output_file
+    from kintsugi.core.runner import failed_record, run_trial
+    from kintsugi.core.video import check_video_path
+
+    try:  # every name, setting and output path is checked before the trial spends anything
+        default_method, default_variant, _ = task_defaults(task)
+        cfg = build_config(task=task, methods=[method or default_method], variants=[shape or default_variant], conditions=[condition], trials=1,
+                           base_seed=seed, overrides=_overrides(set_),
+                           reasoner=_reasoner(reasoner, model, base_url, api_key_env, structured_output))
+        spec = expand(cfg)[0].model_copy(update={"video": str(check_video_path(video)) if video else None})
+        path = check_output_file(record or _record_path(spec), "record", (".json",))
+    except KintsugiError as exc:
+        _fail(exc)
+        return
+    console.rule(f"[bold]{escape(spec.key)}[/bold]")
+    try:
+        result = run_trial(spec, echo=_echo)
+    except KintsugiError as exc:  # e.g. the video could not be encoded: keep what is known
+        result = failed_record(spec, f"{type(exc).__name__}: {exc}")
+    except Exception as exc:  # noqa: BLE001 - a bug in a task: record it with its traceback, do not crash
+        result = failed_record(spec, f"{type(exc).__name__}: {exc}\n{traceback.format_exc(limit=4)}")
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(result.model_dump_json(indent=2))
+    except OSError as exc:
+        _fail(f"cannot write the record {path}: {exc}")
+    colour = "green" if result.success else "red"
+    console.print(f"[bold {colour}]ground truth: {'SUCCESS' if result.success else 'FAILURE'}[/bold {colour}]"
+                  f"  framework verdict: {'success' if result.framework_success else 'failure'}"
+                  f"  sim {result.sim_time:.2f} s, wall {result.wall_time:.2f} s, "
+                  f"{result.reasoning_calls} reasoning calls")
+    console.print(escape(f"record: {path}" + (f"   video: {result.video}" if result.video else "")))
+    if result.error:
+        _fail(f"the trial recorded an error: {first_line(result.error)}", code=1)
+
+
+@app.command()
+def bench(
+    task: Annotated[str, typer.Argument(help="registered task")],
+    suite: Annotated[Optional[str], typer.Option(
+        help="a named campaign of the task (e.g. peg-insertion's `stretch`): its methods, variants, conditions, "
+             "trials and config; options given here go on top")] = None,
+    methods: Annotated[Optional[str], typer.Option(
+        help="comma-separated methods [default: the task's reference method]")] = None,
+    shapes: Annotated[Optional[str], typer.Option(
+        "--shapes", "--variants", help="comma-separated variants [default: the task's first, e.g. round]")] = None,
+    conditions: Annotated[Optional[str], typer.Option(
+        help="comma-separated conditions [default: the task's, e.g. none,friction,pose,all for the peg]")] = None,
+    trials: Annotated[Optional[int], typer.Option(min=1, help="trials per cell [default: 30]")] = None,
+    workers: Annotated[int, typer.Option(min=1, help="parallel worker processes")] = 2,
+    out: Annotated[Optional[Path], typer.Option(
+        help="campaign directory (results.jsonl, report) [default: runs/campaign, or runs/<suite>]")] = None,
+    executor: Annotated[str, typer.Option(help="process (default), inline, or ray")] = "process",
+    trial_timeout: Annotated[float, typer.Option(
+        min=0.001, help="seconds a trial may run before its worker is killed and the trial recorded as failed "
+                        "(process executor)")] = 3600.0,
+    base_seed: Annotated[int, typer.Option(min=0, help="trial i of every cell uses seed base_seed + i, "
+                                                       "so methods meet the same random draws")] = 0,
+    videos_per_cell: Annotated[int, typer.Option(min=0, help="record videos of the first N trials per cell")] = 0,
+    plugin: Annotated[Optional[list[str]], typer.Option(help="module to import in workers (extra tasks)")] = None,
+    set_: SetOpt = None,
+    reasoner: ReasonerOpt = "embedded",
+    model: ModelOpt = None,
+    base_url: BaseUrlOpt = None,
+    api_key_env: KeyEnvOpt = "OPENAI_API_KEY",
+    structured_output: StructuredOpt = "auto",
+) -> None:
+    """Run (or resume) a campaign; print the paper's tables and write report.md / report.html.
+
+    Every name and setting is checked before the first trial. Exits 1 when any trial errored.
+    """
+    from kintsugi.campaign.plan import build_config, suite_of, task_defaults
+    from kintsugi.campaign.render import print_tables
+    from kintsugi.campaign.report import write_report
+    from kintsugi.campaign.runner import error_summary, run_campaign
+    from kintsugi.campaign.tables import all_tables
+
+    try:
+        named = suite_of(task, suite, plugin or []) if suite else None
+        out = out or Path("runs") / (suite or "campaign")
+        default_method, default_variant, default_conditions = task_defaults(task, plugin or [])
+        cfg = build_config(
+            task=task,
+            methods=_csv(methods) if methods else list(named.methods) if named else [default_method],
+            variants=_csv(shapes) if shapes else list(named.shapes) if named else [default_variant],
+            conditions=(_csv(conditions) if conditions else list(named.conditions) if named
+                        else list(default_conditions)),
+            trials=trials or (named.trials if named else 30), base_seed=base_seed,
+            overrides=(dict(named.overrides) if named else {}) | _overrides(set_), plugins=plugin or [],
+            reasoner=_reasoner(reasoner, model, base_url, api_key_env, structured_output),
+            videos_per_cell=videos_per_cell)
+        records = run_campaign(cfg, out, workers=workers, executor=executor, trial_timeout_s=trial_timeout)
+        print_tables(all_tables(records, cfg), console)
+        md, html = write_report(out, cfg, records)
+    except KintsugiError as exc:
+        _fail(exc)
+        return
+    console.print(escape(f"results: {out / 'results.jsonl'}   report: {md}, {html}"))
+    if named is not None and named.companion:
+        console.print(escape(f"beside it (same world, other options): kintsugi bench {task} "
+                             f"--suite {named.companion}"))
+    errors = error_summary(records)
+    if errors:
+        _fail(errors, code=1)
+
+
+@app.command()
+def report(out: Annotated[Path, typer.Argument(help="campaign directory")]) -> None:
+    """Rebuild the tables and report of a campaign directory from its results."""
+    from kintsugi.campaign.plan import expand
+    from kintsugi.campaign.render import print_tables
+    from kintsugi.campaign.report import write_report
+    from kintsugi.campaign.runner import error_summary
+    from kintsugi.campaign.store import ResultStore
+    from kintsugi.campaign.tables import all_tables
+
+    try:
+        store = ResultStore(out)
+        cfg = store.load_config()
+        wanted = {s.key for s in expand(cfg)}
+        records = [r for r in store.read() if r.key in wanted]  # read once, only this campaign's trials
+        md, html = write_report(out, cfg, records)
+        print_tables(all_tables(records, cfg), console)
+    except KintsugiError as exc:
+        _fail(exc)
+        return
+    console.print(escape(f"report: {md}, {html}"))
+    errors = error_summary(records)
+    if errors:
+        err_console.print(f"[yellow]note:[/yellow] {escape(errors)}")
+
+
+def _list(title: str, registry) -> None:  # noqa: ANN001 - a Registry
+    table = Table(title=title)
+    table.add_column("name", style="bold")
+    table.add_column("description")
+    table.add_column("tags", style="dim")
+    for entry in registry:
+        table.add_row(escape(entry.name), escape(entry.description), escape(", ".join(sorted(entry.tags))))
+    console.print(table)
+
+
+@app.command()
+def tasks() -> None:
+    """List registered tasks with their variants and conditions."""
+    from kintsugi.core.plugins import load_builtins
+    from kintsugi.core.registry import TASKS
+
+    load_builtins()
+    _list("tasks", TASKS)
+    for entry in TASKS:
+        t = entry.factory()
+        console.print(f"[bold]{escape(entry.name)}[/bold] variants: {escape(str(getattr(t, 'variants_help', '')))}")
+        conditions = getattr(t, "conditions", {})
+        for name in conditions:
+            text = conditions[name] if isinstance(conditions, dict) else ""
+            console.print(f"  condition [bold]{escape(name)}[/bold]: {escape(text)}")
+
+
+@app.command()
+def methods() -> None:
+    """List registered methods."""
+    import kintsugi.methods.builtin  # noqa: F401
+    from kintsugi.core.registry import METHODS
+
+    _list("methods", METHODS)
+
+
+@app.command()
+def reasoners() -> None:
+    """List registered reasoner backends."""
+    from kintsugi.reasoning import REASONERS, load_builtin_backends
+
+    load_builtin_backends()
+    _list("reasoners", REASONERS)
+
+
+@app.command()
+def explain(
+    path: Annotated[Path, typer.Argument(help="a trial record (.json) or a campaign's results.jsonl")],
+    key: Annotated[Optional[str], typer.Option(
+        help="trial key when PATH holds many records: task/method/variant/condition/seed (or with __)")] = None,
+) -> None:
+    """Print a trial's story: each skill, its verdict, and the full reasoning transcript."""
+    from kintsugi.cli.explain import explain_record, load_record
+
+    try:
+        rec = load_record(path, key)
+    except KintsugiError as exc:
+        _fail(exc)
+        return
+    explain_record(rec, console)
+
+
+@app.command()
+def graph(
+    task: Annotated[str, typer.Argument(help="a tabletop (system B) task, see `kintsugi tasks`")],
+    condition: Annotated[str, typer.Option(help="layout condition of the first observation: none, pose, ...")] = "none",
+    seed: Annotated[int, typer.Option(min=0, help="seed of the layout draw")] = 0,
+    out: Annotated[Optional[Path], typer.Option(help="picture .png (default: runs/graph_<task>.png)")] = None,
+    dot: Annotated[Optional[Path], typer.Option(help="also write the graph as a graphviz .dot file")] = None,
+    json_out: Annotated[Optional[Path], typer.Option("--json", help="also write the graph as JSON")] = None,
+    set_: SetOpt = None,
+    reasoner: ReasonerOpt = "embedded",
+    model: ModelOpt = None,
+    base_url: BaseUrlOpt = None,
+    api_key_env: KeyEnvOpt = "OPENAI_API_KEY",
+    structured_output: StructuredOpt = "auto",
+) -> None:
+    """Compile a task's recovery-augmented task graph (composer, arranger, Eq. 8) from its first observation;
+    print it and draw it (nominal solid blue, recovery dashed pink)."""
+    from kintsugi.methods.agentchord.show import compile_for_task, print_graph
+    from kintsugi.core.outputs import check_output_file
+
+    try:
+        png = check_output_file(out or Path("runs") / f"graph_{task}.png", "picture", (".png",))
+        extra = [(p, k, s) for p, k, s in ((dot, "dot file", ".dot"), (json_out, "graph JSON", ".json")) if p]
+        paths = [check_output_file(p, k, (s,)) for p, k, s in extra]
+        compiled = compile_for_task(task, condition, seed, _overrides(set_),
+                                    _reasoner(reasoner, model, base_url, api_key_env, structured_output))
+    except KintsugiError as exc:
+        _fail(exc)
+        return
+    print_graph(compiled, console)
+    from kintsugi.taskgraph.render import to_dot, write_graph_picture
+
+    try:
+        png.parent.mkdir(parents=True, exist_ok=True)
+        write_graph_picture(compiled.graph, png)
+        for (_, kind, _), path in zip(extra, paths):
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(to_dot(compiled.graph) if kind == "dot file" else compiled.graph.to_json(indent=2))
+    except OSError as exc:
+        _fail(f"cannot write the graph files: {exc}")
+    console.print(escape("picture: " + ", ".join(str(p) for p in [png, *paths])))
+
+
+@app.command()
+def export(
+    campaign: Annotated[Path, typer.Argument(help="campaign directory (campaign.json + results.jsonl)")],
+    format_: Annotated[Literal["lerobot", "hdf5"], typer.Option("--format", help="lerobot (v2.1 layout) or hdf5 "
+                                                                "(robomimic layout)")],
+    out: Annotated[Path, typer.Option(help="new (or empty) directory to write the dataset into")],
+    trials: Annotated[Optional[str], typer.Option(help="which trials, e.g. 'method=agentchord,condition=drop,"
+                                                  "seed=0-9,recovered' (fields task method variant condition key "
+                                                  "seed; flags recovered nominal success failed ok)")] = None,
+    fps: Annotated[float, typer.Option(help="frames per second (must divide the control rate)")] = 10.0,
+) -> None:
+    """Re-run chosen trials with a recorder and write observations, actions and nominal/recovery segment labels
+    for policy learning. A trial whose re-run differs from its record is refused by name (exit 1)."""
+    from kintsugi.export import export_campaign
+
+    try:
+        rep = export_campaign(campaign, format_, out, trials, fps,
+                              on_trial=lambda key, what: console.print(escape(f"{key}: {what}")))
+    except KintsugiError as exc:
+        _fail(exc)
+        return
+    console.print(escape(f"exported {len(rep.exported)} trials ({sum(e.frames for e in rep.exported)} frames) to "
+                         f"{rep.path}"))
+    if rep.refused:
+        _fail(f"{len(rep.refused)} trials refused: " + "; ".join(f"{k}: {why}" for k, why in rep.refused), code=1)
+
+
+def main() -> None:  # pragma: no cover
+    app()
+
+
+if __name__ == "__main__":  # pragma: no cover
+    app()

@@ -1,5 +1,0 @@
-"""Retrieval memory of successful episodes (CoRAL): SQLite storage, lexical/parametric or embedding similarity."""
-
-from kintsugi.memory.store import Embedder, Episode, EpisodeMemory, Match
-
-__all__ = ["Embedder", "Episode", "EpisodeMemory", "Match"]

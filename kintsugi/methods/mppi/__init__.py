@@ -1,0 +1,1 @@
+"""kintsugi.methods.mppi."""

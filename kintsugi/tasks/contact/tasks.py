@@ -1,8 +1,0 @@
-"""Registers system C's contact tasks (importing this module is enough)."""
-
-from kintsugi.tasks.contact import flip_box, flip_wall, pick_box, pick_clutter, push_force, push_pick_board
-from kintsugi.tasks.contact.task import register
-
-for _task in (flip_box.TASK, flip_wall.TASK, pick_box.TASK, pick_clutter.TASK, push_force.TASK,
-              push_pick_board.TASK):
-    register(_task)

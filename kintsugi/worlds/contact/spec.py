@@ -1,0 +1,73 @@
+"""What a contact task declares: its config, how a trial's world is drawn, and its ground-truth scoring.
+
+A task file (pick_box.py, ...) builds one `ContactTaskDef`; task.py runs any of them. The
+scorer watches the evaluation world at the robot's inner rate (for goals about history,
+like "pushed with 5 N for 2 s") and judges the end; it is never shown to a method.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+from typing import Callable, Protocol
+
+import numpy as np
+
+from kintsugi.core.config import StrictModel
+from kintsugi.worlds.contact.conditions import Drawer
+from kintsugi.worlds.contact.config import ContactConfig
+from kintsugi.worlds.contact.objects import Geometry, Physics
+from kintsugi.worlds.contact.world import EvaluationWorld, Scene, rotate
+
+
+@dataclass(frozen=True)
+class TrialSetup:
+    """One trial's draws: the scene, the TRUE physics (evaluation world only), the nominal
+    physics (the catalogue values a prior may start from), and the drawn numbers for the record."""
+
+    scene: Scene
+    truth: dict[str, Physics]
+    nominal: dict[str, Physics]
+    params: dict[str, float]
+
+
+class Scorer(Protocol):
+    """Ground-truth judge of one attempt; sees the evaluation world, never shown to a method."""
+
+    def reset(self) -> None: ...
+
+    def watch(self, world: EvaluationWorld) -> None: ...
+
+    def finish(self, world: EvaluationWorld) -> tuple[bool, StrictModel]: ...
+
+
+@dataclass(frozen=True)
+class ContactTaskDef:
+    name: str
+    description: str
+    instruction: str
+    config_type: type[ContactConfig]
+    build: Callable[[ContactConfig, Drawer], TrialSetup]
+    scorer: Callable[[ContactConfig, TrialSetup], Scorer]
+    target: str
+    """The object the task is about (sysid fits its mass and friction)."""
+
+
+def corners(geo: Geometry) -> np.ndarray:
+    """(8 x parts, 3) box corners of an object in its own frame."""
+    out = []
+    for p in geo.parts:
+        for s in itertools.product((-1, 1), repeat=3):
+            out.append(np.asarray(p.pos) + np.asarray(s) * np.asarray(p.half))
+    return np.array(out)
+
+
+def lowest_z(world: EvaluationWorld, name: str) -> float:
+    """Height of an object's lowest corner above the table top (ground truth)."""
+    pos, quat = world.object_pose(name)
+    pts = pos + rotate(np.broadcast_to(quat, (len(c := corners(world.scene.geometry[name])), 4)), c)
+    return float(pts[:, 2].min())
+
+
+def nominal(mass: tuple[float, float], friction: tuple[float, float]) -> Physics:
+    return Physics(mass_kg=(mass[0] + mass[1]) / 2, friction=(friction[0] + friction[1]) / 2)

@@ -1,0 +1,34 @@
+"""The embedded composer reads who-holds-what from the instruction: "the cup with the left arm" binds the
+cup to that arm, "hold the cup up" makes the cup lifted before anything is carried over or poured into it
+(pour-dual), and an instruction that says neither plans as before."""
+
+from __future__ import annotations
+
+from kintsugi.methods.agentchord.composer import arm_bindings, embedded_compose, held_up
+from tests.taskgraph_fixtures import POUR_GOAL, composer_request
+
+DUAL = ("Pick up the cup with the left arm and the bottle with the right arm, hold the cup up, pour water "
+        "from the bottle into it, then put both back upright on the table.")
+DUAL_GOAL = POUR_GOAL + ["on_table(cup)", "released(cup)"]
+
+
+def test_bindings_and_held_up_are_read_from_the_text() -> None:
+    assert arm_bindings(DUAL, ["left", "right"], ["bottle", "cup"]) == {"cup": "left", "bottle": "right"}
+    assert held_up(DUAL, ["bottle", "cup"]) == ["cup"]
+    plain = "Pour water from the bottle into the cup using the right arm."
+    assert arm_bindings(plain, ["left", "right"], ["bottle", "cup"]) == {} and held_up(plain, ["bottle", "cup"]) == []
+
+
+def test_dual_pour_lifts_the_cup_with_the_left_arm_before_the_right_pours() -> None:
+    ops = list(embedded_compose(composer_request(task=DUAL, goal=DUAL_GOAL)).edge_operators.values())
+    assert "grasp(left, cup)" in ops and "grasp(right, bottle)" in ops
+    assert not any(o.startswith(("grasp(left, bottle", "grasp(right, cup")) for o in ops)
+    pour = ops.index("pour(right, bottle, cup)")
+    assert ops.index("lift(left, cup)") < ops.index("carry_over(right, bottle, cup)") < pour
+    assert ops.index("place(left, cup)") > pour
+
+
+def test_without_held_up_the_cup_stays_on_the_table() -> None:
+    text = "Pour water from the bottle with the right arm into the cup, then put the bottle back upright."
+    ops = list(embedded_compose(composer_request(task=text)).edge_operators.values())
+    assert ops[0] == "grasp(right, bottle)" and not any("cup)" in o and o.startswith(("grasp", "lift")) for o in ops)

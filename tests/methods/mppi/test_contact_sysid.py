@@ -1,0 +1,126 @@
+"""mppi-sysid's honesty and its identification on a task world, from the robot's own log only."""
+
+from __future__ import annotations
+
+import kintsugi  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
+import numpy as np
+import pytest
+
+import kintsugi.methods.builtin  # noqa: F401
+from kintsugi.control.sysid import SysIdConfig
+from kintsugi.methods.expert.method import MPPISysId
+from kintsugi.core.plugins import load_builtins
+from kintsugi.core.registry import TASKS
+from kintsugi.methods.mppi.identify import BeliefFitter, raw_ft, windows
+from kintsugi.worlds.contact.robot import ContactRobot
+from kintsugi.worlds.contact.world import PlanningWorld, tared_force_world
+from kintsugi.core.record import TrialSpec
+
+load_builtins()
+
+
+def _ctx(condition: str, seed: int, method: str = "mppi-sysid"):  # noqa: ANN202
+    task = TASKS.get("push-force").factory()
+    cfg = task.config({})
+    world, scorer, setup = task.build(cfg, condition, seed)
+    spec = TrialSpec(task="push-force", method=method, variant="default", condition=condition, seed=seed)
+    return task, cfg, world, setup, task.context(cfg, setup, False, spec)
+
+
+def test_the_prior_comes_from_the_catalogue_never_from_the_trial() -> None:
+    priors = []
+    for seed in (0, 1):
+        _, cfg, _, setup, ctx = _ctx("physics", seed)
+        assert ctx.oracle_physics is None
+        prior = MPPISysId(ctx).prior()["box"]
+        assert prior.mass_kg == pytest.approx(setup.nominal["box"].mass_kg * cfg.sysid.prior_mass_scale)
+        priors.append(prior)
+    assert priors[0] == priors[1]  # the truth differs between the seeds; the prior does not
+
+
+def _push_and_release(robot: ContactRobot, setup, speed: float) -> None:  # noqa: ANN001
+    """Scripted excitation: push the box at `speed`, stop, let it slide out (no planner involved)."""
+    box = robot.observe().objects["box"].pos
+    hx = setup.scene.geometry["box"].parts[0].half[0]
+    x0 = box[0] - hx - 0.012
+    robot.act(np.array([x0 - 0.02, box[1], 0.05, 0, 0]), 0.6)
+    robot.act(np.array([x0 - 0.02, box[1], 0.008, 0, 0]), 0.4)
+    robot.new_log()
+    for k in range(40):
+        robot.act(np.array([x0 + speed * 0.01 * k, box[1], 0.008, 0, 0]), 0.01)
+    robot.act(np.array([x0 + speed * 0.4 - 0.03, box[1], 0.008, 0, 0]), 0.6)
+
+
+def _pushed(sysid: SysIdConfig):  # noqa: ANN202
+    """A fitter from the 8x / 1.8x prior holding the windows of one scripted push of the box (seed 3)."""
+    _, cfg, world, setup, ctx = _ctx("physics", 3)
+    robot = ContactRobot(world)
+    planning = PlanningWorld(cfg, ctx.known, MPPISysId(ctx).prior())
+    fitter = BeliefFitter(planning, "box", cfg.sysid.mass_bounds_kg, cfg.sysid.friction_bounds, sysid)
+    _push_and_release(robot, setup, 0.35)
+    fitter.add(robot.new_log())
+    return fitter, planning, setup
+
+
+def test_sysid_pulls_an_8x_1_8x_prior_toward_the_truth_from_the_robots_log() -> None:
+    fitter, planning, setup = _pushed(SysIdConfig(grid=9, zoom_rounds=2, max_evals=40, nthread=2, substeps=5))
+    assert len(fitter.logs) >= 2
+    phys, result = fitter.fit()
+    truth = setup.truth["box"]
+    assert result.loss < 0.2 * result.prior_loss
+    # a push pins the friction force (mu x m x g) well; mass and friction apart are seen only weakly
+    product = phys.friction * phys.mass_kg / (truth.friction * truth.mass_kg)
+    assert abs(product - 1) < 0.1, (phys, truth)
+    assert abs(phys.mass_kg / truth.mass_kg - 1) < 0.5, (phys, truth)  # from 8x
+    assert planning.physics_of("box").mass_kg == pytest.approx(phys.mass_kg)
+
+
+def test_windows_hold_what_the_robot_saw() -> None:
+    _, cfg, world, setup, ctx = _ctx("none", 0)
+    robot = ContactRobot(world)
+    planning = PlanningWorld(cfg, ctx.known, ctx.nominal)
+    _push_and_release(robot, setup, 0.3)
+    log = robot.new_log()
+    wins = windows(planning, log, "box")
+    assert wins and all(w.controls.shape == (30, 5) for w in wins)
+    # the replayed sensor is the raw F/T: re-taring it gives back what the robot read
+    obs = log.obs[5]
+    raw = raw_ft(obs, planning.layout.hand_weight_n)
+    assert np.allclose(tared_force_world(raw, obs.ee[3], planning.layout.hand_weight_n), obs.force)
+
+
+def _obs(t: float, ee_z: float, force_z: float, obj_z: float, speed: float, touch: float = 0.0):  # noqa: ANN202
+    from kintsugi.worlds.contact.robot import Observation, TrackedObject
+
+    box = TrackedObject(pos=np.array([0.1, 0.0, obj_z]), quat=np.array([1.0, 0, 0, 0]),
+                        lin_vel=np.array([speed, 0.0, 0.0]), ang_vel=np.zeros(3))
+    return Observation(t=t, ee=np.array([0.0, 0.0, ee_z, 0.0]), ee_vel=np.zeros(4), fingers=np.full(2, 0.02 if touch > 0 else 0.0),
+                       finger_vel=np.zeros(2), force=np.array([0.0, 0.0, force_z]), torque=np.zeros(3),
+                       touch=np.full(2, abs(touch)), objects={"box": box}, ctrl=np.zeros(5))
+
+
+@pytest.mark.parametrize(("ee_z", "force_z", "obj_z", "speed", "touch", "kind"), [
+    (0.008, -0.5, 0.025, 0.05, 0.0, "slide"),   # pushed along the table: its friction is in the push
+    (0.0005, -12.0, 0.025, 0.05, 0.0, "grind"),  # fingertips pressing the table: the pads' drag swamps it
+    (0.0005, -12.0, 0.025, 0.0, 0.0, "grind"),
+    (0.008, -0.5, 0.025, 0.05, 4.0, "felt"),    # dragged in the pinch: the grip, not the table, sets its motion
+    (0.008, -0.5, 0.025, 0.05, -4.0, "slide"),  # (touch < 0: closed fingers, pads pressed on each other)
+    (0.2, 3.0, 0.15, 0.05, 4.0, "felt"),        # carried: only its weight shows
+    (0.2, 3.0, 0.15, 0.0, 4.0, "felt"),
+    (0.2, 0.0, 0.025, 0.0, 0.0, None),          # nothing moved, nothing felt
+])
+def test_a_window_is_judged_by_what_the_robot_read(ee_z, force_z, obj_z, speed, touch, kind) -> None:  # noqa: ANN001
+    from kintsugi.methods.mppi.identify import _kind
+
+    seg = [_obs(0.01 * k, ee_z, force_z, obj_z, speed, touch) for k in range(31)]
+    assert _kind(seg, "box", rest_z=0.025) == kind
+
+
+def test_without_a_slide_the_fit_keeps_the_friction_belief() -> None:
+    fitter, planning, _ = _pushed(SysIdConfig(grid=5, zoom_rounds=0, max_evals=0, nthread=2, substeps=5))
+    assert fitter.slid
+    for w in fitter.logs:
+        w.label = "felt"  # as if the box had only been lifted
+    belief = planning.physics_of("box").friction
+    phys, result = fitter.fit()
+    assert not fitter.slid and phys.friction == belief and set(result.params) == {"mass:box"}
