@@ -118,6 +118,6 @@ def _checked(spec: TrialSpec, record: TrialRecord) -> TrialRecord:
         return record
     return failed_record(
         spec,
-        f"task {spec.task!r} returned a record whose {', '.join(wrong)} do not match the trial "
-        f"(got key {record.key!r}); its run() must copy them from the TrialSpec",
+        f"the executor returned a record whose {', '.join(wrong)} do not match the trial "
+        f"(got key {record.key!r}); an executor must yield each spec with the record run_trial made for it",
     )

@@ -7,7 +7,7 @@ from kintsugi.campaign.plan import CampaignConfig, expand
 
 
 def cfg(**kw):
-    base = dict(task="fake-coin", methods=["baseline", "recover"], variants=["fair"],
+    base = dict(task="fake-coin", methods=["plain", "recover"], variants=["fair"],
                 conditions=["easy", "hard"], trials=3, base_seed=10)
     return CampaignConfig(**{**base, **kw})
 
@@ -19,7 +19,7 @@ def test_expand_pairs_seeds_across_methods():
     for s in specs:
         by_cell.setdefault((s.method, s.variant, s.condition), []).append(s.seed)
     assert all(seeds == [10, 11, 12] for seeds in by_cell.values())
-    assert list(by_cell) == [("baseline", "fair", "easy"), ("baseline", "fair", "hard"),
+    assert list(by_cell) == [("plain", "fair", "easy"), ("plain", "fair", "hard"),
                              ("recover", "fair", "easy"), ("recover", "fair", "hard")]
     assert len({s.key for s in specs}) == len(specs)
 

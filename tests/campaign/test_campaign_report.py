@@ -6,7 +6,7 @@ from kintsugi.campaign.runner import run_campaign
 
 
 def test_report_files(tmp_path):
-    cfg = CampaignConfig(task="fake-coin", methods=["baseline", "recover"], variants=["fair", "raises"],
+    cfg = CampaignConfig(task="fake-coin", methods=["plain", "recover"], variants=["fair", "raises"],
                          conditions=["easy", "hard"], trials=4, plugins=["tests.fake_tasks"])
     run_campaign(cfg, tmp_path, executor="inline", progress=False)
     md_path, html_path = write_report(tmp_path)
@@ -20,7 +20,7 @@ def test_report_files(tmp_path):
 
 
 def test_report_only_counts_the_configs_trials(tmp_path):
-    cfg = CampaignConfig(task="fake-coin", methods=["baseline"], variants=["fair"], conditions=["easy"],
+    cfg = CampaignConfig(task="fake-coin", methods=["plain"], variants=["fair"], conditions=["easy"],
                          trials=6, plugins=["tests.fake_tasks"])
     run_campaign(cfg, tmp_path, executor="inline", progress=False)
     small = cfg.model_copy(update={"trials": 2})

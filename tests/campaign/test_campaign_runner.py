@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 
+from kintsugi.campaign.executors import EXECUTORS, InlineExecutor
 from kintsugi.campaign.plan import CampaignConfig, expand
 from kintsugi.campaign.runner import run_campaign
 from kintsugi.campaign.store import ResultStore
@@ -19,7 +20,7 @@ ROOT = Path(__file__).resolve().parents[2]
 
 
 def cfg(**kw):
-    base = dict(task="fake-coin", methods=["baseline", "recover"], variants=["fair", "raises"],
+    base = dict(task="fake-coin", methods=["plain", "recover"], variants=["fair", "raises"],
                 conditions=["easy", "hard"], trials=3, plugins=["tests.fake_tasks"])
     return CampaignConfig(**{**base, **kw})
 
@@ -82,6 +83,7 @@ def _campaign_process(tmp_path, c, options: str) -> subprocess.Popen:
                             cwd=ROOT, env=env)
 
 
+@pytest.mark.slow
 def test_real_sigkill_then_resume(tmp_path):
     """Kill a running campaign process at an arbitrary moment; the rerun completes it exactly once."""
     c = cfg(variants=["slow"], conditions=["easy"], trials=20)
@@ -121,6 +123,7 @@ def test_config_mismatch_refused_before_running(tmp_path):
         run_campaign(cfg(trials=1, base_seed=100), tmp_path, executor="inline", progress=False)
 
 
+@pytest.mark.slow
 def test_process_and_inline_give_the_same_records(tmp_path):
     c = cfg()
     proc = run_campaign(c, tmp_path / "proc", workers=2, executor="process", progress=False)
@@ -131,24 +134,25 @@ def test_process_and_inline_give_the_same_records(tmp_path):
     assert any(r.error and "fake failure" in r.error for r in proc)
 
 
+@pytest.mark.slow
 def test_crashed_worker_is_a_failed_trial_and_the_campaign_goes_on(tmp_path):
     """Seed 1 kills its worker while seed 0 is certainly running in the same pool (a file barrier):
     both are rerun alone, only seed 1 is recorded as crashed, and the later trials still run."""
     barrier = tmp_path / "barrier"
     barrier.mkdir()
-    c = cfg(methods=["baseline"], variants=["crashes", "fair"], conditions=["easy"], trials=3,
+    c = cfg(methods=["plain"], variants=["crashes", "fair"], conditions=["easy"], trials=3,
             overrides={"barrier_dir": str(barrier)})
     out = tmp_path / "out"
     records = run_campaign(c, out, workers=2, executor="process", progress=False)
     assert [r.key for r in records] == [s.key for s in expand(c)]
     crashed = [r for r in records if r.error]
-    assert [r.key for r in crashed] == ["fake-coin/baseline/crashes/easy/1"]
+    assert [r.key for r in crashed] == ["fake-coin/plain/crashes/easy/1"]
     assert "worker process crashed" in crashed[0].error and "rerun alone" in crashed[0].error
     assert not crashed[0].success
     # The innocent trials that shared the broken pool got their real result.
     inline_cfg = c.model_copy(update={"variants": ["fair"]})
     inline = run_campaign(inline_cfg, tmp_path / "inline", executor="inline", progress=False)
-    seed0 = next(r for r in records if r.key == "fake-coin/baseline/crashes/easy/0")
+    seed0 = next(r for r in records if r.key == "fake-coin/plain/crashes/easy/0")
     assert seed0.without_timings()["success"] in (True, False) and seed0.params == {"p": 0.6}
     assert [r.without_timings() for r in records if r.variant == "fair"] == [r.without_timings() for r in inline]
     keys = file_keys(out)
@@ -159,10 +163,11 @@ def test_crashed_worker_is_a_failed_trial_and_the_campaign_goes_on(tmp_path):
     assert (out / "results.jsonl").read_bytes() == before
 
 
+@pytest.mark.slow
 def test_hung_trial_is_killed_at_the_timeout_and_the_others_still_run(tmp_path):
     """Seed 1 sleeps 60 s; with a 2 s timeout it is recorded as timed out, the trial that shared its pool
     is started again and gets its real result, and the campaign ends in seconds, not a minute."""
-    c = cfg(methods=["baseline"], variants=["hangs"], conditions=["easy"], trials=4)
+    c = cfg(methods=["plain"], variants=["hangs"], conditions=["easy"], trials=4)
     t0 = time.monotonic()
     records = run_campaign(c, tmp_path / "out", workers=2, executor="process", progress=False, trial_timeout_s=2.0)
     assert time.monotonic() - t0 < 30
@@ -174,11 +179,18 @@ def test_hung_trial_is_killed_at_the_timeout_and_the_others_still_run(tmp_path):
     assert all(r.error is None for r in records if r.seed != 1)
 
 
+@EXECUTORS.register("wrong-identity", "a buggy executor: yields each trial with another trial's record")
+class WrongIdentityExecutor(InlineExecutor):
+    def run(self, specs):
+        for spec, record in super().run(specs):
+            yield spec, record.model_copy(update={"key": "bogus", "seed": record.seed + 100})
+
+
 def test_record_with_wrong_identity_becomes_failure(tmp_path):
-    records = run_campaign(cfg(variants=["wrong-key"], conditions=["easy"], methods=["baseline"], trials=2),
-                           tmp_path, executor="inline", progress=False)
-    assert [r.key for r in records] == ["fake-coin/baseline/wrong-key/easy/0", "fake-coin/baseline/wrong-key/easy/1"]
-    assert all("do not match the trial" in r.error for r in records)
+    records = run_campaign(cfg(variants=["fair"], conditions=["easy"], methods=["plain"], trials=2),
+                           tmp_path, executor="wrong-identity", progress=False)
+    assert [r.key for r in records] == ["fake-coin/plain/fair/easy/0", "fake-coin/plain/fair/easy/1"]
+    assert all("key, seed do not match the trial" in r.error and not r.success for r in records)
 
 
 def test_clear_errors_for_bad_setup(tmp_path):
@@ -231,7 +243,7 @@ def _alive(pid: int) -> bool:
 
 def _running_process_campaign(tmp_path) -> tuple[subprocess.Popen, set[int]]:
     """A process-executor campaign of slow fake trials in a child process, started and holding workers."""
-    c = cfg(variants=["hangs"], conditions=["easy"], methods=["baseline"], trials=3)
+    c = cfg(variants=["hangs"], conditions=["easy"], methods=["plain"], trials=3)
     proc = _campaign_process(tmp_path, c, "workers=2, executor='process'")
     results = tmp_path / "out" / "results.jsonl"
     deadline = time.monotonic() + 60
@@ -251,6 +263,7 @@ def _gone(pids: set[int], within_s: float) -> bool:
     return False
 
 
+@pytest.mark.slow
 def test_sigterm_stops_the_campaign_and_its_workers(tmp_path):
     proc, workers = _running_process_campaign(tmp_path)
     proc.send_signal(signal.SIGTERM)
@@ -258,6 +271,7 @@ def test_sigterm_stops_the_campaign_and_its_workers(tmp_path):
     assert _gone(workers, 5.0), "a terminated campaign must not leave its workers running"
 
 
+@pytest.mark.slow
 def test_workers_of_a_killed_campaign_exit_on_their_own(tmp_path):
     """SIGKILL runs no handler in the campaign process: each worker notices it is orphaned and exits."""
     from kintsugi.campaign.executors import ORPHAN_POLL_S
