@@ -26,6 +26,9 @@ ReasonerOpt = Annotated[str, typer.Option(help="reasoner backend: embedded (offl
 ModelOpt = Annotated[Optional[str], typer.Option(help="model name for the openai backend")]
 BaseUrlOpt = Annotated[Optional[str], typer.Option(help="OpenAI-compatible endpoint (vLLM, Ollama, llama.cpp)")]
 KeyEnvOpt = Annotated[str, typer.Option(help="environment variable holding the API key")]
+PluginOpt = Annotated[Optional[list[str]], typer.Option(
+    "--plugin", metavar="MODULE", help="module to import first, registering its tasks, methods or reasoner backends (repeatable; "
+                     "it must be importable, e.g. on PYTHONPATH)")]
 StructuredOpt = Annotated[Literal["auto", "strict", "text"], typer.Option(
     help="openai reply format: strict (server-enforced JSON schema / tool calls), text (JSON asked for in the "
          "prompt, parsed tolerantly), auto (strict until the server refuses it, then text)")]
@@ -51,6 +54,18 @@ def _main(
                                           help="print the installed version and exit")] = False,
 ) -> None:
     """kintsugi: resilient robot manipulation with reasoned checks and recovery, on MuJoCo."""
+
+
+def _plugins(modules: list[str] | None) -> list[str]:
+    """Import `--plugin` modules (after the built-ins) before any name is resolved; one line if one fails."""
+    if modules:
+        from kintsugi.core.plugins import load_plugins
+
+        try:
+            load_plugins(modules)
+        except KintsugiError as exc:
+            _fail(exc)
+    return list(modules or [])
 
 
 def _csv(text: str) -> list[str]:
@@ -119,11 +134,13 @@ def run(
     base_url: BaseUrlOpt = None,
     api_key_env: KeyEnvOpt = "OPENAI_API_KEY",
     structured_output: StructuredOpt = "auto",
+    plugin: PluginOpt = None,
 ) -> None:
     """Run one trial, tell its story skill by skill, and save its record (and video).
 
     Exits 1 when the trial recorded an error (e.g. an unreachable endpoint); the record is saved first.
     """
+    plugin = _plugins(plugin)
     from kintsugi.campaign.plan import build_config, expand, task_defaults
     from kintsugi.campaign.runner import first_line
     from kintsugi.core.outputs import check_output_file
@@ -131,9 +148,9 @@ def run(
     from kintsugi.core.video import check_video_path
 
     try:  # every name, setting and output path is checked before the trial spends anything
-        default_method, default_variant, _ = task_defaults(task)
+        default_method, default_variant, _ = task_defaults(task, plugin)
         cfg = build_config(task=task, methods=[method or default_method], variants=[shape or default_variant], conditions=[condition], trials=1,
-                           base_seed=seed, overrides=_overrides(set_),
+                           base_seed=seed, overrides=_overrides(set_), plugins=plugin,
                            reasoner=_reasoner(reasoner, model, base_url, api_key_env, structured_output))
         spec = expand(cfg)[0].model_copy(update={"video": str(check_video_path(video)) if video else None})
         path = check_output_file(record or _record_path(spec), "record", (".json",))
@@ -185,7 +202,7 @@ def bench(
     base_seed: Annotated[int, typer.Option(min=0, help="trial i of every cell uses seed base_seed + i, "
                                                        "so methods meet the same random draws")] = 0,
     videos_per_cell: Annotated[int, typer.Option(min=0, help="record videos of the first N trials per cell")] = 0,
-    plugin: Annotated[Optional[list[str]], typer.Option(help="module to import in workers (extra tasks)")] = None,
+    plugin: PluginOpt = None,
     set_: SetOpt = None,
     reasoner: ReasonerOpt = "embedded",
     model: ModelOpt = None,
@@ -193,15 +210,17 @@ def bench(
     api_key_env: KeyEnvOpt = "OPENAI_API_KEY",
     structured_output: StructuredOpt = "auto",
 ) -> None:
-    """Run (or resume) a campaign; print the paper's tables and write report.md / report.html.
+    """Run (or resume) a campaign; print its system's tables and write report.md / report.html.
 
     Every name and setting is checked before the first trial. Exits 1 when any trial errored.
+    Plugin modules are imported here and in every worker (the campaign's `plugins`).
     """
+    plugin = _plugins(plugin)
     from kintsugi.campaign.plan import build_config, suite_of, task_defaults
     from kintsugi.campaign.render import print_tables
     from kintsugi.campaign.report import write_report
     from kintsugi.campaign.runner import error_summary, run_campaign
-    from kintsugi.campaign.tables import all_tables
+    from kintsugi.campaign.tables import tables_for
 
     try:
         named = suite_of(task, suite, plugin or []) if suite else None
@@ -218,7 +237,7 @@ def bench(
             reasoner=_reasoner(reasoner, model, base_url, api_key_env, structured_output),
             videos_per_cell=videos_per_cell)
         records = run_campaign(cfg, out, workers=workers, executor=executor, trial_timeout_s=trial_timeout)
-        print_tables(all_tables(records, cfg), console)
+        print_tables(tables_for(cfg.task, records, cfg), console)
         md, html = write_report(out, cfg, records)
     except KintsugiError as exc:
         _fail(exc)
@@ -233,14 +252,15 @@ def bench(
 
 
 @app.command()
-def report(out: Annotated[Path, typer.Argument(help="campaign directory")]) -> None:
+def report(out: Annotated[Path, typer.Argument(help="campaign directory")], plugin: PluginOpt = None) -> None:
     """Rebuild the tables and report of a campaign directory from its results."""
+    _plugins(plugin)
     from kintsugi.campaign.plan import expand
     from kintsugi.campaign.render import print_tables
     from kintsugi.campaign.report import write_report
     from kintsugi.campaign.runner import error_summary
     from kintsugi.campaign.store import ResultStore
-    from kintsugi.campaign.tables import all_tables
+    from kintsugi.campaign.tables import tables_for
 
     try:
         store = ResultStore(out)
@@ -248,7 +268,7 @@ def report(out: Annotated[Path, typer.Argument(help="campaign directory")]) -> N
         wanted = {s.key for s in expand(cfg)}
         records = [r for r in store.read() if r.key in wanted]  # read once, only this campaign's trials
         md, html = write_report(out, cfg, records)
-        print_tables(all_tables(records, cfg), console)
+        print_tables(tables_for(cfg.task, records, cfg), console)
     except KintsugiError as exc:
         _fail(exc)
         return
@@ -269,8 +289,9 @@ def _list(title: str, registry) -> None:  # noqa: ANN001 - a Registry
 
 
 @app.command()
-def tasks() -> None:
+def tasks(plugin: PluginOpt = None) -> None:
     """List registered tasks with their variants and conditions."""
+    _plugins(plugin)
     from kintsugi.core.plugins import load_builtins
     from kintsugi.core.registry import TASKS
 
@@ -286,8 +307,9 @@ def tasks() -> None:
 
 
 @app.command()
-def methods() -> None:
+def methods(plugin: PluginOpt = None) -> None:
     """List registered methods."""
+    _plugins(plugin)
     import kintsugi.methods.builtin  # noqa: F401
     from kintsugi.core.registry import METHODS
 
@@ -295,8 +317,9 @@ def methods() -> None:
 
 
 @app.command()
-def reasoners() -> None:
+def reasoners(plugin: PluginOpt = None) -> None:
     """List registered reasoner backends."""
+    _plugins(plugin)
     from kintsugi.reasoning import REASONERS, load_builtin_backends
 
     load_builtin_backends()
@@ -334,9 +357,11 @@ def graph(
     base_url: BaseUrlOpt = None,
     api_key_env: KeyEnvOpt = "OPENAI_API_KEY",
     structured_output: StructuredOpt = "auto",
+    plugin: PluginOpt = None,
 ) -> None:
     """Compile a task's recovery-augmented task graph (composer, arranger, Eq. 8) from its first observation;
     print it and draw it (nominal solid blue, recovery dashed pink)."""
+    _plugins(plugin)
     from kintsugi.methods.agentchord.show import compile_for_task, print_graph
     from kintsugi.core.outputs import check_output_file
 
@@ -373,9 +398,11 @@ def export(
                                                   "seed=0-9,recovered' (fields task method variant condition key "
                                                   "seed; flags recovered nominal success failed ok)")] = None,
     fps: Annotated[float, typer.Option(help="frames per second (must divide the control rate)")] = 10.0,
+    plugin: PluginOpt = None,
 ) -> None:
     """Re-run chosen trials with a recorder and write observations, actions and nominal/recovery segment labels
     for policy learning. A trial whose re-run differs from its record is refused by name (exit 1)."""
+    _plugins(plugin)
     from kintsugi.export import export_campaign
 
     try:
