@@ -13,8 +13,8 @@ import numpy as np  # noqa: E402
 
 from kintsugi.campaign.plan import CampaignConfig  # noqa: E402
 from kintsugi.campaign.stats import mean, wilson_interval  # noqa: E402
-from kintsugi.campaign.tables import CONTACT_FORMATIONS, group_by_cell  # noqa: E402
-from kintsugi.core.record import TrialRecord
+from kintsugi.campaign.tables import group_by_cell, successes  # noqa: E402
+from kintsugi.core.record import TrialRecord  # noqa: E402
 
 
 def _order(values: list[str]) -> list[str]:
@@ -46,7 +46,7 @@ def success_plot(records: Sequence[TrialRecord], cfg: CampaignConfig | None = No
     methods = _order([m for m, _, _ in groups])
     variants = _order([v for _, v, _ in groups])
     conditions = _order([c for _, _, c in groups])
-    fig, axes = _axes(len(variants), "Success G per condition (95% Wilson interval)")
+    fig, axes = _axes(len(variants), "Ground-truth success per condition (95% Wilson interval)")
     width = 0.8 / max(1, len(methods))
     x = np.arange(len(conditions))
     for ax, variant in zip(axes, variants):
@@ -54,7 +54,7 @@ def success_plot(records: Sequence[TrialRecord], cfg: CampaignConfig | None = No
             rates, lows, highs = [], [], []
             for cond in conditions:
                 rs = groups.get((method, variant, cond), [])
-                k = sum(r.success and r.error is None for r in rs)
+                k = successes(rs)
                 p = k / len(rs) if rs else np.nan
                 lo, hi = wilson_interval(k, len(rs)) if rs else (np.nan, np.nan)
                 rates.append(100 * p)
@@ -66,20 +66,20 @@ def success_plot(records: Sequence[TrialRecord], cfg: CampaignConfig | None = No
         ax.set_xticks(x, conditions, rotation=20, ha="right")
         ax.set_ylim(0, 105)
         ax.grid(axis="y", alpha=0.3)
-    axes[0].set_ylabel("success G (%)")
+    axes[0].set_ylabel("success (%)")
     _legend(fig, axes[0])
     return _png(fig)
 
 
 def extra_executions_plot(records: Sequence[TrialRecord], cfg: CampaignConfig | None = None) -> bytes | None:
-    """Mean extra executions per contact formation, a panel per variant, pooled over conditions.
+    """Mean extra executions per contact formation (system A's `PegFigures`), a panel per variant, pooled
+    over conditions. None when no trial recorded any extra execution (nothing to plot)."""
+    from kintsugi.methods.recovery.tables import extra_executions, ordered_skills
 
-    None when no trial recorded any extra execution (nothing to plot).
-    """
     recs = [r for r in records if r.error is None]
-    skills = [s for s in CONTACT_FORMATIONS if any(k.lower() == s for r in recs for k in r.extra_executions)]
-    skills += sorted({k.lower() for r in recs for k in r.extra_executions} - set(skills))
-    methods = _order([r.method for r in recs if any(v > 0 for v in r.extra_executions.values())])
+    extras = {id(r): extra_executions(r) for r in recs}
+    skills = ordered_skills(k for e in extras.values() for k in e)
+    methods = _order([r.method for r in recs if any(v > 0 for v in extras[id(r)].values())])
     if not skills or not methods:
         return None
     variants = _order([v for _, v, _ in group_by_cell(recs, cfg)])
@@ -89,7 +89,7 @@ def extra_executions_plot(records: Sequence[TrialRecord], cfg: CampaignConfig | 
     for ax, variant in zip(axes, variants):
         for j, method in enumerate(methods):
             rs = [r for r in recs if r.method == method and r.variant == variant]
-            vals = [mean({k.lower(): v for k, v in r.extra_executions.items()}.get(s, 0) for r in rs) for s in skills]
+            vals = [mean(extras[id(r)].get(s, 0) for r in rs) for s in skills]
             ax.bar(x + (j - (len(methods) - 1) / 2) * width, vals, width, label=method)
         ax.set_title(variant)
         ax.set_xticks(x, [s.capitalize() for s in skills])
@@ -97,3 +97,11 @@ def extra_executions_plot(records: Sequence[TrialRecord], cfg: CampaignConfig | 
     axes[0].set_ylabel("extra executions / trial")
     _legend(fig, axes[0])
     return _png(fig)
+
+
+def plots_for(system: str | None, records: Sequence[TrialRecord], cfg: CampaignConfig | None = None) -> list[bytes]:
+    """The campaign's figures: ground-truth success for every system, extra executions for `peg`."""
+    images = [success_plot(records, cfg) if records else None]
+    if system == "peg":
+        images.append(extra_executions_plot(records, cfg))
+    return [png for png in images if png]

@@ -13,7 +13,7 @@ from rich.table import Table
 
 from kintsugi.campaign.tables import TextTable
 
-_LEFT = {"Method", "Variant", "Condition", "From \\ To"}
+_LEFT = {"Task", "Method", "Variant", "Condition", "From \\ To"}
 
 
 def to_rich(t: TextTable) -> Table:

@@ -14,11 +14,11 @@ from typing import Sequence
 
 import kintsugi
 from kintsugi.campaign.plan import CampaignConfig
-from kintsugi.campaign.plots import extra_executions_plot, success_plot
+from kintsugi.campaign.plots import plots_for
 from kintsugi.campaign.render import to_html, to_markdown
 from kintsugi.campaign.runner import error_summary
 from kintsugi.campaign.store import ResultStore
-from kintsugi.campaign.tables import all_tables
+from kintsugi.campaign.tables import system_of, tables_for
 from kintsugi.core.errors import KintsugiError
 from kintsugi.core.record import TrialRecord
 
@@ -72,13 +72,15 @@ def write_report(
     """Write report.md and report.html into `out_dir`; config and records default to what it holds.
 
     Only records belonging to the config's trials are reported (a campaign whose
-    trial count shrank keeps its extra lines on disk, but they are not counted).
+    trial count shrank keeps its extra lines on disk, but they are not counted). The tables and
+    plots are those of the task's system (`tables_for`), the generic ones for a task of no system.
     """
     out = Path(out_dir)
     store = ResultStore(out)
     cfg = cfg or store.load_config()
     recs = _records_for(cfg, store.read() if records is None else records)
-    tables = all_tables(recs, cfg)
+    system = system_of(cfg.task, cfg)
+    tables = tables_for(system or cfg.task, recs, cfg)
     info = machine_info()
     cfg_json = json.dumps(cfg.model_dump(mode="json"), indent=2)
     summary = f"{len(recs)} of {len(cfg.cells()) * cfg.trials} trials recorded; task `{cfg.task}`."
@@ -93,10 +95,9 @@ def write_report(
     md_path = out / "report.md"
     _write(md_path, "\n".join(md) + "\n")
 
-    images = [success_plot(recs, cfg) if recs else None, extra_executions_plot(recs, cfg)]
     figs = "".join(
         f'<img alt="campaign plot" src="data:image/png;base64,{base64.b64encode(png).decode()}">'
-        for png in images if png
+        for png in plots_for(system, recs, cfg)
     )
     esc = html.escape
     body = [

@@ -11,11 +11,11 @@ import math
 import statistics
 from typing import Iterable
 
-from scipy.stats import norm
+from scipy.stats import binomtest
 
 
 def wilson_interval(k: int, n: int, confidence: float = 0.95) -> tuple[float, float]:
-    """Wilson score interval for k successes out of n trials, as fractions in [0, 1].
+    """Wilson score interval for k successes out of n trials, as fractions in [0, 1] (scipy's `binomtest`).
 
     With n == 0 there is no information, so the interval is the whole range (0, 1).
     """
@@ -25,15 +25,8 @@ def wilson_interval(k: int, n: int, confidence: float = 0.95) -> tuple[float, fl
         raise ValueError(f"confidence must be in (0, 1), got {confidence}")
     if n == 0:
         return 0.0, 1.0
-    z = float(norm.ppf(0.5 + confidence / 2.0))
-    p = k / n
-    denom = 1.0 + z * z / n
-    center = (p + z * z / (2.0 * n)) / denom
-    half = z / denom * math.sqrt(p * (1.0 - p) / n + z * z / (4.0 * n * n))
-    # Clamp exact endpoints: at k == 0 / k == n the bound is 0 / 1 analytically.
-    low = 0.0 if k == 0 else max(0.0, center - half)
-    high = 1.0 if k == n else min(1.0, center + half)
-    return low, high
+    ci = binomtest(k, n).proportion_ci(confidence_level=confidence, method="wilson")
+    return float(ci.low), float(ci.high)
 
 
 def format_rate(k: int, n: int, confidence: float = 0.95) -> str:

@@ -1,27 +1,25 @@
-"""The paper's tables computed from trial records, as plain `TextTable`s (render.py draws them).
+"""A campaign's tables as plain `TextTable`s (render.py draws them): each system's own, then the generic ones.
 
-Conventions, chosen to match Tables II–III of the contact-formation paper:
-- A trial with `error` counts as a failure for F and G and in the errors column;
-  it is left out of the extra-execution means (it never ran its course).
-- Extra executions show "—" for a method none of whose trials ever recorded a
-  nonzero extra execution: a baseline without recovery (the paper's "—"), while a
-  recovery method that needed none in one condition still shows 0.0.
-- Table III pools each (method, variant) over conditions, as the paper shows one
-  matrix per peg shape; rows are the skill that failed, columns the first skill
-  of its recovery plan, row percentages with counts.
+`tables_for(task or system, records, cfg)` picks the tables by the task's `system` attribute
+(`peg`, `tabletop`, `contact`, or whatever a plugin registers with `register_tables`) and always
+adds the generic success table and the cost table. A task of no known system gets the generic
+tables only. The systems' own tables live beside their methods (`kintsugi/methods/*/tables.py`);
+the built-in ones are imported only when a campaign of that system is tabulated.
+
+Conventions shared by every table:
+- Cells are (method, variant, condition), in config order first, then cells only the records know.
+- A trial with `error` counts as a failure and in the errors column.
 """
 
 from __future__ import annotations
 
-from collections import Counter
+import importlib
 from dataclasses import dataclass, field
-from typing import Iterable, Sequence
+from typing import Callable, Iterable, Sequence
 
 from kintsugi.campaign.plan import CampaignConfig
 from kintsugi.campaign.stats import fmt, format_rate, mean, median, ratio
 from kintsugi.core.record import TrialRecord
-
-CONTACT_FORMATIONS = ("fit", "align", "insert")
 
 Cell = tuple[str, str, str]
 
@@ -36,6 +34,53 @@ class TextTable:
     notes: list[str] = field(default_factory=list)
 
 
+TableBuilder = Callable[[Sequence[TrialRecord], "CampaignConfig | None"], list[TextTable]]
+
+_BUILDERS: dict[str, TableBuilder | str] = {
+    "peg": "kintsugi.methods.recovery.tables:system_tables",
+    "tabletop": "kintsugi.methods.agentchord.tables:system_tables",
+    "contact": "kintsugi.methods.coral.tables:system_tables",
+}
+"""System -> its tables' builder, or "module:function" imported on first use."""
+
+
+def register_tables(system: str, builder: TableBuilder) -> None:
+    """Give a system (e.g. a plugin's own) its tables; a task with `system = <name>` then gets them."""
+    _BUILDERS[system] = builder
+
+
+def _builder(system: str) -> TableBuilder | None:
+    found = _BUILDERS.get(system)
+    if isinstance(found, str):
+        module, name = found.split(":")
+        found = _BUILDERS[system] = getattr(importlib.import_module(module), name)
+    return found
+
+
+def system_of(name: str, cfg: CampaignConfig | None = None) -> str | None:
+    """The system whose tables fit `name`: a system's own name, or a registered task's `system`
+    attribute (its plugins loaded from `cfg`). None for a task of no system or one that is not known."""
+    if name in _BUILDERS:
+        return name
+    from kintsugi.campaign.bootstrap import bootstrap
+    from kintsugi.core.errors import KintsugiError
+    from kintsugi.core.registry import TASKS
+
+    try:
+        bootstrap(list(cfg.plugins) if cfg else [], name)
+        return getattr(TASKS.get(name).factory(), "system", None)
+    except KintsugiError:
+        return None
+
+
+def tables_for(name: str, records: Sequence[TrialRecord], cfg: CampaignConfig | None = None) -> list[TextTable]:
+    """The system's own tables (by task name or system name), then the generic success and cost tables."""
+    system = system_of(name, cfg)
+    builder = _builder(system) if system else None
+    own = builder(records, cfg) if builder else []
+    return [*own, success_table(records, cfg), timing_table(records, cfg)]
+
+
 def _cell(r: TrialRecord) -> Cell:
     return (r.method, r.variant, r.condition)
 
@@ -48,91 +93,29 @@ def group_by_cell(records: Iterable[TrialRecord], cfg: CampaignConfig | None = N
     return {c: rs for c, rs in groups.items() if rs}
 
 
-def _ordered_skills(seen: Iterable[str]) -> list[str]:
-    seen = set(seen)
-    return [s for s in CONTACT_FORMATIONS if s in seen] + sorted(seen - set(CONTACT_FORMATIONS))
+def successes(rs: Iterable[TrialRecord]) -> int:
+    """Ground-truth successes among trials that ran without error."""
+    return sum(r.success and r.error is None for r in rs)
 
 
-def _recovering_methods(records: Sequence[TrialRecord]) -> set[str]:
-    """Methods that showed recovery in any trial: an extra execution or a recovery transition."""
-    return {r.method for r in records if r.transitions or any(v > 0 for v in r.extra_executions.values())}
-
-
-def table_ii(
-    records: Sequence[TrialRecord],
-    cfg: CampaignConfig | None = None,
-    recovering: set[str] | None = None,
-) -> TextTable:
-    """Success F/G with Wilson 95% intervals and mean extra executions per contact formation.
-
-    `recovering` names the methods that have recovery (their extra executions show
-    numbers even when all zero); by default it is inferred from the records.
-    """
-    skills = _ordered_skills(k.lower() for r in records for k in r.extra_executions)
-    recovering = _recovering_methods(records) if recovering is None else recovering
+def success_table(records: Sequence[TrialRecord], cfg: CampaignConfig | None = None) -> TextTable:
+    """Per cell: ground-truth success and the method's own verdict with Wilson 95% intervals."""
     table = TextTable(
-        title="Table II — success and extra executions per cell",
-        columns=["Method", "Variant", "Condition", "n", *[s.capitalize() for s in skills],
-                 "F % [95% CI]", "G % [95% CI]", "F+G-", "F-G+", "Err"],
-        notes=[
-            "Fit/Align/Insert: mean extra executions per trial caused by recovery (trials without error); "
-            "— for methods that never recovered.",
-            "F: success by the method's own verdict, G: ground-truth success, as % [Wilson 95% interval]. "
-            "F+G-: false successes (the method claimed success, the peg was not in); F-G+: missed successes. "
-            "Err: trials that raised or crashed; they count as failures.",
-        ],
+        title="Success per cell",
+        columns=["Method", "Variant", "Condition", "n", "Success % [95% CI]", "Verdict % [95% CI]",
+                 "False succ.", "Err"],
+        notes=["Success: the task's scorer (ground truth); Verdict: the method's own claim of success; both as "
+               "% [Wilson 95% interval]. False succ.: trials the method called a success that were not. "
+               "Err: trials that raised or crashed; they count as failures."],
     )
     for (method, variant, condition), rs in group_by_cell(records, cfg).items():
         n = len(rs)
         ok = [r for r in rs if r.error is None]
-        extra = [
-            fmt(mean(_lower(r.extra_executions).get(s, 0) for r in ok)) if method in recovering else "—"
-            for s in skills
-        ]
-        f = sum(r.framework_success and r.error is None for r in rs)
-        g = sum(r.success and r.error is None for r in rs)
+        verdict = sum(r.framework_success for r in ok)
         false_ok = sum(r.framework_success and not r.success for r in ok)
-        missed = sum(r.success and not r.framework_success for r in ok)
-        table.rows.append([method, variant, condition, str(n), *extra,
-                           format_rate(f, n), format_rate(g, n), str(false_ok), str(missed), str(n - len(ok))])
+        table.rows.append([method, variant, condition, str(n), format_rate(successes(rs), n),
+                           format_rate(verdict, n), str(false_ok), str(n - len(ok))])
     return table
-
-
-def _lower(d: dict[str, int]) -> dict[str, int]:
-    return {k.lower(): v for k, v in d.items()}
-
-
-def transition_counts(records: Iterable[TrialRecord]) -> Counter[tuple[str, str]]:
-    """(failed skill, first recovery skill) -> count over the given trials."""
-    return Counter((a.lower(), b.lower()) for r in records for a, b in r.transitions)
-
-
-def table_iii(records: Sequence[TrialRecord], cfg: CampaignConfig | None = None) -> list[TextTable]:
-    """One transition matrix per (method, variant) with any transitions, pooled over conditions."""
-    pooled: dict[tuple[str, str], list[TrialRecord]] = {}
-    for (method, variant, _), rs in group_by_cell(records, cfg).items():
-        pooled.setdefault((method, variant), []).extend(rs)
-    tables = []
-    for (method, variant), rs in pooled.items():
-        counts = transition_counts(rs)
-        if not counts:
-            continue
-        skills = _ordered_skills([a for a, _ in counts] + [b for _, b in counts] + list(CONTACT_FORMATIONS))
-        table = TextTable(
-            title=f"Table III — recovery transitions, {method} / {variant} (pooled over conditions)",
-            columns=["From \\ To", *[s.capitalize() for s in skills], "n"],
-            notes=["Row: the skill that failed; column: the first skill of its recovery plan. "
-                   "Row percentages with counts."],
-        )
-        for src in skills:
-            total = sum(counts[(src, dst)] for dst in skills)
-            cells = [
-                f"{100 * counts[(src, dst)] / total:.1f}% ({counts[(src, dst)]})" if total else "—"
-                for dst in skills
-            ]
-            table.rows.append([src.capitalize(), *cells, str(total)])
-        tables.append(table)
-    return tables
 
 
 def timing_table(records: Sequence[TrialRecord], cfg: CampaignConfig | None = None) -> TextTable:
@@ -156,8 +139,3 @@ def timing_table(records: Sequence[TrialRecord], cfg: CampaignConfig | None = No
             str(sum(r.reasoning_errors for r in rs)),
         ])
     return table
-
-
-def all_tables(records: Sequence[TrialRecord], cfg: CampaignConfig | None = None) -> list[TextTable]:
-    """Table II, every Table III matrix, and the cost table, in report order."""
-    return [table_ii(records, cfg), *table_iii(records, cfg), timing_table(records, cfg)]

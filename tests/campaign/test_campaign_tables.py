@@ -1,4 +1,4 @@
-"""Table II/III and the cost table from hand-made records with known numbers."""
+"""System A's Tables II/III, the generic tables and the dispatch by system, from hand-made records with known numbers."""
 
 from io import StringIO
 
@@ -6,8 +6,11 @@ from rich.console import Console
 
 from kintsugi.campaign.plan import CampaignConfig
 from kintsugi.campaign.render import print_tables, to_html, to_markdown
-from kintsugi.campaign.tables import table_ii, table_iii, timing_table
+from kintsugi.campaign.tables import register_tables, success_table, tables_for, timing_table, TextTable
 from kintsugi.core.record import TrialRecord
+from kintsugi.core.registry import TASKS
+from kintsugi.methods.recovery.skill_log import PegFigures
+from kintsugi.methods.recovery.tables import table_ii, table_iii
 
 
 def rec(method, condition, seed, **kw):
@@ -27,12 +30,13 @@ def records():
     for i in range(30):
         extra = {"fit": 1, "align": 2 if i % 2 else 0, "insert": 0}
         transitions = [("fit", "fit"), ("align", "fit") if i < 3 else ("align", "align")]
-        out.append(rec("vlm", "all", i, success=i < 25, framework_success=i < 25, extra_executions=extra,
-                       transitions=transitions, reasoning_calls=4, reasoning_latency_s=2.0,
+        out.append(rec("vlm", "all", i, success=i < 25, framework_success=i < 25,
+                       method_figures=PegFigures(extra_executions=extra).model_dump(), transitions=transitions, reasoning_calls=4, reasoning_latency_s=2.0,
                        error="boom" if i == 29 else None))
     # Recovery, "friction": needs no recovery -> 0.0, not "—".
     for i in range(30):
-        out.append(rec("vlm", "friction", i, success=True, framework_success=True, extra_executions={"fit": 0}))
+        out.append(rec("vlm", "friction", i, success=True, framework_success=True,
+                       method_figures={"extra_executions": {"fit": 0}}))
     return out
 
 
@@ -86,3 +90,48 @@ def test_renderings_contain_the_numbers():
 def test_tables_without_config_use_record_order():
     t = table_ii(list(reversed(records())))
     assert [r[0] for r in t.rows] == ["vlm", "vlm", "none"]
+
+
+def test_older_records_keep_their_extra_executions():
+    old = TrialRecord.model_validate({"key": "peg/vlm/round/all/0", "task": "peg", "method": "vlm", "variant": "round",
+                                      "condition": "all", "seed": 0, "extra_executions": {"Fit": 2}})
+    assert table_ii([old]).rows[0][4] == "2.0"
+
+
+def test_success_table():
+    t = success_table(records(), CFG)
+    assert t.columns == ["Method", "Variant", "Condition", "n", "Success % [95% CI]", "Verdict % [95% CI]",
+                         "False succ.", "Err"]
+    rows = {(r[0], r[2]): r for r in t.rows}
+    assert rows[("none", "all")][3:] == ["30", "47 [30–64]", "50 [33–67]", "1", "0"]
+    assert rows[("vlm", "all")][3:] == ["30", "83 [66–93]", "83 [66–93]", "0", "1"]
+
+
+def test_tables_for_peg_system():
+    titles = [t.title for t in tables_for("peg", records(), CFG)]
+    assert titles[0].startswith("Table II") and titles[1].startswith("Table III")
+    assert titles[2:] == ["Success per cell", "Cost per cell"]
+
+
+def test_tables_for_peg_task_by_its_system_attribute():
+    cfg = CFG.model_copy(update={"task": "peg-insertion"})
+    recs = [r.model_copy(update={"task": "peg-insertion"}) for r in records()]
+    assert tables_for("peg-insertion", recs, cfg)[0].title.startswith("Table II")
+
+
+class _NoSystemTask:
+    """A plugin task that names no system."""
+
+
+def test_unknown_system_gets_the_generic_tables_only():
+    if "test-no-system" not in TASKS:
+        TASKS.register("test-no-system", "a task of no system", tags=("test",))(_NoSystemTask)
+    for name in ("no-such-task", "test-no-system"):
+        cfg = CFG.model_copy(update={"task": name})
+        assert [t.title for t in tables_for(name, records(), cfg)] == ["Success per cell", "Cost per cell"]
+
+
+def test_a_plugin_system_registers_its_tables():
+    register_tables("test-system", lambda recs, cfg: [TextTable("Own", ["n"], [[str(len(recs))]])])
+    tables = tables_for("test-system", records(), CFG)
+    assert tables[0].title == "Own" and tables[0].rows == [["90"]] and len(tables) == 3
