@@ -118,6 +118,7 @@ def _pinch_handle(robot, cfg, board, z: float) -> None:  # noqa: ANN001
     robot.act(np.array([g[0], g[1], z, yaw, 0.0]), 0.6)
 
 
+@pytest.mark.slow
 def test_push_pick_board_scores_a_board_lifted_by_its_overhanging_handle() -> None:
     cfg, world, scorer, setup = _task("push-pick-board")
     robot = ContactRobot(world, watchers=[scorer.watch])

@@ -5,10 +5,8 @@ from __future__ import annotations
 import kintsugi  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
 import pytest
 
-import kintsugi.methods.builtin  # noqa: F401
-from kintsugi.core.registry import METHODS
 from kintsugi.core.plugins import load_builtins
-from kintsugi.core.registry import TASKS
+from kintsugi.core.registry import METHODS, TASKS
 from kintsugi.core.record import TrialSpec
 from kintsugi.core.runner import run_trial
 
@@ -31,20 +29,21 @@ def test_tasks_and_methods_are_registered_with_their_tags() -> None:
 
 def test_other_systems_methods_are_refused_by_name() -> None:
     record = run_trial(_spec("pick-box", "scripted"))
-    assert record.error and "does not run contact (system C)" in record.error and "expert-fsm" in record.error
+    assert record.error and "does not run pick-box" in record.error and "expert-fsm" in record.error
     record = run_trial(TrialSpec(task="pick-box", method="expert-fsm", variant="round", condition="none", seed=0))
     assert record.error and "unknown variant 'round'" in record.error and "default" in record.error
     record = run_trial(_spec("pick-box", "expert-fsm", overrides={"box.no_such": 1}))
     assert record.error and "box.no_such" in record.error
 
 
+@pytest.mark.slow
 def test_expert_fsm_picks_the_box_and_logs_every_stage() -> None:
     record = run_trial(_spec("pick-box", "expert-fsm", seed=2))
     assert record.error is None, record.error
     assert record.success and record.framework_success
     assert [s.skill for s in record.skills] == ["reach", "descend", "grasp", "lift", "hold"]
     assert all(s.reached for s in record.skills)
-    assert record.details["pinched"] and record.details["lowest_z_m"] >= 0.05
+    assert record.task_figures["pinched"] and record.task_figures["lowest_z_m"] >= 0.05
     assert record.params["box.mass_kg"] != pytest.approx(0.25)  # a randomized draw
 
 
@@ -53,7 +52,7 @@ def test_a_box_left_on_the_table_is_a_failure_whatever_the_method_says() -> None
     record = run_trial(_spec("pick-box", "expert-fsm", seed=2, overrides={"control.episode_s": 0.5}))
     assert record.error is None, record.error
     assert not record.success and not record.framework_success
-    assert record.details["lowest_z_m"] < 0.01 and not record.details["pinched"]
+    assert record.task_figures["lowest_z_m"] < 0.01 and not record.task_figures["pinched"]
     assert record.skills and not record.skills[-1].reached
 
 
@@ -65,6 +64,7 @@ def test_every_paper_task_is_registered_with_both_experts() -> None:
     assert paper <= set(EXPERTS)
 
 
+@pytest.mark.slow
 def test_plan_plot_is_a_png_with_the_three_series(tmp_path) -> None:  # noqa: ANN001
     from kintsugi.worlds.contact.plot import PlanSeries, plot_path_for, plot_plan
 
@@ -80,6 +80,7 @@ def test_plan_plot_is_a_png_with_the_three_series(tmp_path) -> None:  # noqa: AN
     assert image.shape[0] > 400 and image.shape[1] > 600
 
 
+@pytest.mark.slow
 def test_a_contact_video_comes_with_its_planner_plot(tmp_path) -> None:  # noqa: ANN001
     video = tmp_path / "pick.mp4"
     record = run_trial(TrialSpec(task="pick-box", method="expert-fsm", variant="default", condition="none", seed=0,
