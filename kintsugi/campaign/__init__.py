@@ -7,7 +7,8 @@ workers do not import rich/matplotlib):
 - runner.run_campaign(cfg, out_dir, workers=2, executor="process", progress=True) -> list[TrialRecord]
 - executors.EXECUTORS (registry: process, inline, ray)
 - store.ResultStore(out_dir): .read(), .done_keys(), .load_config()
-- tables.all_tables(records, cfg) / table_ii / table_iii / timing_table -> TextTable
+- tables.tables_for(task or system, records, cfg) -> list[TextTable]: the system's own tables
+  (kintsugi/methods/*/tables.py) + success_table + timing_table
 - render.print_tables(tables, console), to_markdown, to_html
 - report.write_report(out_dir, cfg=None, records=None) -> (report.md, report.html)
 """
