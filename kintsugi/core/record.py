@@ -53,6 +53,8 @@ class SkillLog(StrictModel):
     verdict: bool | None = None
     message: str = ""
     sim_time: float = 0.0
+    """The absolute sim time (s) at which the skill ended, on the trial's one clock, in every system;
+    a skill's duration is the difference to the previous skill's (or the start's) time."""
 
 
 class Event(StrictModel):

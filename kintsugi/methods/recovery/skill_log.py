@@ -23,12 +23,13 @@ def peg_figures(log: TrialLog) -> PegFigures:
 
 def log_skill(log: TrialLog, r: SkillResult, t: float, recovery: bool = False,
               verdict: bool | None = None, message: str = "") -> SkillLog:
+    """Log `r` as ended at `t`, the robot's sim time after the skill (SkillLog.sim_time is absolute)."""
     goal = to_pose(r.goal).model_dump()
     entry = SkillLog(
         skill=r.skill, goal={a: goal[a] for a in SKILLS[r.skill].axes},
         terminal=to_pose(r.terminal).model_dump(), reached=r.reached, timed_out=r.timed_out,
         compression_limit=r.compression_limit, recovery=recovery, verdict=verdict, message=message,
-        sim_time=round(r.sim_time, 4),
+        sim_time=round(t, 4),
     )
     log.skill(entry)
     flags = "reached" if r.reached else ("COMPRESSION LIMIT" if r.compression_limit else "timeout")
