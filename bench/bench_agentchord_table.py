@@ -1,10 +1,10 @@
-"""Table I figures of a system-B campaign (one results.jsonl): per method, ground-truth success with a Wilson
-95 % interval, mean episode steps, sim time, execution time (sim + measured reasoning), modelled execution
-time (sim + calls x 5 s), the steps and modelled time of the trials it completed (the paper's "steps executed
-to complete a task"), reasoning calls after planning, recoveries, recovery latency (firing -> first
-recovery command), and detection delay (a drop -> the monitor's firing, the replan, or for a drop during a recovery
-the recovery watch's "recovery disturbed", in 10 ms control steps:
-monitors that read the pads run every control step, so for them it is about the persistence window; checks
+"""Table I of system-B campaigns (one results.jsonl each), as `kintsugi bench` prints it: the package's tables
+(`kintsugi.campaign.tables.tables_for`, system B's Table I from `kintsugi/methods/agentchord/tables.py`: success
+with a Wilson 95 % interval, episode steps, sim, execution and modelled time, reasoning calls, the steps and
+modelled time of completed trials, recoveries, recovery latency, and the paired figures against AgentChord on
+the same seeds), then the detection delay read from the trials' event logs: a drop -> the monitor's firing,
+the replan, or for a drop during a recovery the recovery watch's "recovery disturbed", in 10 ms control steps
+(monitors that read the pads run every control step, so for them it is about the persistence window; checks
 made by a verifier at sub-goals see the drop only when the action ends).
 
     .venv/bin/python bench/bench_agentchord_table.py runs/<campaign> [more campaigns...]
@@ -13,20 +13,25 @@ made by a verifier at sub-goals see the drop only when the action ends).
 
 `--run` is Table I in one command: for every task and suite (`table1` = p 0.10, `table1-p05` = p 0.05,
 every method, 20 trials) it runs `kintsugi bench <task> --suite <suite>` (resumable: finished trials are
-kept), then prints the table of all of them. Latency steps = the largest recovery latency seen.
+kept), then prints the tables of all of them.
 """
 
 from __future__ import annotations
 
 import sys
-from collections import defaultdict
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parent))
 
-from kintsugi.campaign.stats import format_rate, mean  # noqa: E402
-from kintsugi.campaign.store import iter_records  # noqa: E402
-from kintsugi.methods.agentchord.method import metrics_of  # noqa: E402
+from rich.console import Console  # noqa: E402
+
+from bench_mppi import machine  # noqa: E402
+from kintsugi.campaign.render import print_tables  # noqa: E402
+from kintsugi.campaign.stats import fmt, mean  # noqa: E402
+from kintsugi.campaign.store import ResultStore, iter_records  # noqa: E402
+from kintsugi.campaign.tables import TextTable, group_by_cell, tables_for  # noqa: E402
+from kintsugi.core.errors import KintsugiError  # noqa: E402
 
 
 CONTROL_DT_S = 0.01
@@ -71,59 +76,30 @@ def run_suites(argv: list[str]) -> list[str]:
     return outs
 
 
-def paired(rs: list, reference: list) -> str:
-    """Mean steps and execution time over the seeds that both this method and the reference solved: the like-for-like
-    cost, which a mean over all trials hides when one method finishes (at length) trials the other fails early."""
-    ok = {r.seed: metrics_of(r) for r in reference if r.success and metrics_of(r) is not None}
-    pairs = [(metrics_of(r), ok[r.seed]) for r in rs if r.success and r.seed in ok and metrics_of(r) is not None]
-    if not pairs or rs[0].method == "agentchord":
-        return "-"
-    # A tenth of a step and a hundredth of a second: on the tasks where a drop leaves nothing to skip, the two
-    # differ by less than the whole-step, tenth-second rounding of the other columns.
-    return (f"{mean(a.episode_steps for a, _ in pairs):.1f} vs {mean(b.episode_steps for _, b in pairs):.1f} / "
-            f"{mean(a.execution_time_s for a, _ in pairs):.2f} vs {mean(b.execution_time_s for _, b in pairs):.2f} / "
-            f"{mean(a.modelled_execution_time_s for a, _ in pairs):.1f} vs "
-            f"{mean(b.modelled_execution_time_s for _, b in pairs):.1f} ({len(pairs)})")
-
-
-def completed(rs: list) -> str:
-    """Mean steps and modelled execution time over the trials the method completed (succeeded)."""
-    done = [m for r in rs if r.success and (m := metrics_of(r)) is not None]
-    if not done:
-        return "-"
-    return f"{mean(m.episode_steps for m in done):.0f} / {mean(m.modelled_execution_time_s for m in done):.1f}"
+def delay_table(records: list) -> TextTable:
+    """Detection delay per cell, from the event logs (a diagnostic beside Table I, not a method figure)."""
+    table = TextTable(title="Detection delay (drop -> detection), control steps, from the event logs",
+                      columns=["Method", "Variant", "Condition", "n", "Mean", "Drops detected"])
+    for (method, variant, condition), rs in group_by_cell(records).items():
+        delays = [d for r in rs for d in detection_delays(r)]
+        table.rows.append([method, variant, condition, str(len(rs)), fmt(mean(delays), 0), str(len(delays))])
+    return table
 
 
 def main() -> None:
     outs = run_suites(sys.argv[2:]) if sys.argv[1:2] == ["--run"] else sys.argv[1:]
-    reference = defaultdict(list)  # agentchord's trials per (task, condition, p), from any of the campaigns given
+    console = Console()
+    print(f"machine: {machine()}")
     for out in outs:
-        for r in iter_records(out):
-            if r.method == "agentchord":
-                reference[(r.task, r.condition, r.params.get("drop_p"))].append(r)
-    for out in outs:
-        groups = defaultdict(list)
-        for r in iter_records(out):
-            groups[(r.condition, r.params.get("drop_p"), r.method)].append(r)
-        print(f"## {out}")
-        print("| condition | p | method | n | success % [95% CI] | steps | sim s | exec s | modelled s | runtime calls "
-              "| completed: steps / modelled s | recoveries | latency steps | detect delay steps (mean, n) | errors "
-              "| steps / exec s / modelled s where it and agentchord both succeed: it vs agentchord (n) |")
-        print("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|")
-        for (cond, p, method), rs in sorted(groups.items(), key=lambda kv: (str(kv[0][0]), str(kv[0][1]), kv[0][2])):
-            ms = [metrics_of(r) for r in rs]
-            have = [m for m in ms if m is not None]
-            steps = mean(m.episode_steps for m in have) if have else float("nan")
-            lat = [x for m in have for x in m.recovery_latency_steps]
-            delays = [d for r in rs for d in detection_delays(r)]
-            delay = f"{mean(delays):.0f}, {len(delays)}" if delays else "-"
-            print(f"| {cond} | {p} | {method} | {len(rs)} | {format_rate(sum(r.success for r in rs), len(rs))} | "
-                  f"{steps:.0f} | {mean(r.sim_time for r in rs):.1f} | "
-                  f"{mean(m.execution_time_s for m in have) if have else float('nan'):.1f} | "
-                  f"{mean(m.modelled_execution_time_s for m in have) if have else float('nan'):.1f} | "
-                  f"{mean(m.runtime_reasoning_calls for m in have) if have else float('nan'):.1f} | "
-                  f"{completed(rs)} | {sum(m.recoveries for m in have)} | {max(lat) if lat else '-'} | {delay} | "
-                  f"{sum(1 for r in rs if r.error)} | {paired(rs, reference[(rs[0].task, cond, p)])} |")
+        store = ResultStore(Path(out))
+        records = list(iter_records(out))
+        try:
+            cfg = store.load_config()
+        except KintsugiError:
+            cfg = None
+        task = cfg.task if cfg else (records[0].task if records else "tabletop")
+        console.print(f"## {out}")
+        print_tables([*tables_for(task, records, cfg), delay_table(records)], console)
 
 
 if __name__ == "__main__":

@@ -2,7 +2,8 @@
 
     .venv/bin/python bench/bench_peg.py [--trials 20] [--seed 0]
 
-(a) Wall time of baseline trials through `run_trial` (shapes mixed, condition "all").
+(a) Wall time of baseline trials through `run_trial` (shapes mixed, condition "all"); their system-A tables
+    (`kintsugi.campaign.tables.tables_for`, as `kintsugi bench peg-insertion` prints them) at the end.
 (b) Physics steps per wall-second while the CF skills run (`execute_skill`, rendering
     excluded), against a tight `mujoco.mj_step` loop on the same MjModel/MjData replaying the
     same base trajectory (same contacts, same number of steps; the replay must end in the same state, bit for bit).
@@ -22,6 +23,8 @@ import kintsugi  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
 import mujoco
 import numpy as np
 
+from kintsugi.campaign.render import print_tables
+from kintsugi.campaign.tables import tables_for
 from kintsugi.core.plugins import load_builtins
 from kintsugi.worlds.peg.conditions import sample_params
 from kintsugi.worlds.peg.config import PegTaskConfig
@@ -40,8 +43,8 @@ def _percentile(xs: list[float], q: float) -> float:
     return float(np.percentile(np.array(xs), q))
 
 
-def bench_trials(n: int, seed0: int) -> tuple[list[float], list[int], int]:
-    walls, steps, successes = [], [], 0
+def bench_trials(n: int, seed0: int) -> tuple[list[float], list[int], int, list]:
+    walls, steps, successes, records = [], [], 0, []
     for i in range(n):
         spec = TrialSpec(task="peg-insertion", method="baseline", variant=SHAPES[i % len(SHAPES)],
                          condition="all", seed=seed0 + i)
@@ -51,7 +54,8 @@ def bench_trials(n: int, seed0: int) -> tuple[list[float], list[int], int]:
         walls.append(rec.wall_time)
         steps.append(rec.physics_steps)
         successes += rec.success
-    return walls, steps, successes
+        records.append(rec)
+    return walls, steps, successes, records
 
 
 def bench_step_rate(shape: str, seed: int, repeats: int) -> dict[str, float]:
@@ -133,7 +137,7 @@ def main() -> None:
           f"{os.cpu_count()} CPUs | Python {sys.version.split()[0]} | mujoco {mujoco.__version__}")
     run_trial(TrialSpec(task="peg-insertion", method="baseline", variant="round", condition="none", seed=0))  # warm-up
 
-    walls, steps, successes = bench_trials(args.trials, args.seed)
+    walls, steps, successes, records = bench_trials(args.trials, args.seed)
     med, p90 = statistics.median(walls), _percentile(walls, 90)
     rates = [bench_step_rate(s, args.seed, args.repeats) for s in SHAPES]
     fw_rate = sum(r["steps"] for r in rates) / sum(r["framework_s"] for r in rates)
@@ -163,6 +167,8 @@ def main() -> None:
     for shape, r in zip(SHAPES, rates):
         print(f"| {shape} | {r['steps']} | {r['framework_s']:.4f} | {r['raw_s']:.4f} | {r['render_s']:.4f} | "
               f"{r['framework_s'] / r['raw_s']:.2f}x |")
+    print()
+    print_tables(tables_for("peg-insertion", records))
 
 
 if __name__ == "__main__":

@@ -40,6 +40,18 @@ def drop_p(records: Sequence[TrialRecord]) -> str:
     return ", ".join(values) or DASH
 
 
+def by_drop_p(rs: Sequence[TrialRecord]) -> dict[str, list[TrialRecord]]:
+    """A cell's trials per drop probability; a trial that recorded none (one that errored before its world
+    was drawn) joins the cell's only probability, or stands apart under "—" when the cell has several."""
+    groups: dict[str, list[TrialRecord]] = {}
+    for r in rs:
+        groups.setdefault(drop_p([r]), []).append(r)
+    if DASH in groups and len(groups) == 2:
+        loose = groups.pop(DASH)
+        groups[next(iter(groups))].extend(loose)
+    return groups
+
+
 def _metrics(rs: Sequence[TrialRecord]) -> list[AgentChordMetrics]:
     return [m for r in rs if (m := metrics_of(r)) is not None]
 
@@ -75,9 +87,8 @@ def table_i(records: Sequence[TrialRecord], cfg: CampaignConfig | None = None) -
     table = TextTable(
         title="Table I — success, steps, execution time and reasoning calls per cell",
         columns=["Method", "Variant", "Condition", "p", "n", "Success % [95% CI]", "Steps", "Sim s", "Exec s",
-                 "Modelled s", "Calls plan / run", "Completed: steps / modelled s", "Recoveries",
-                 "Latency steps", "Err", f"Paired vs {REFERENCE}: steps / exec s / modelled s (n)",
-                 f"Paired diff vs {REFERENCE}"],
+                 "Modelled s", "Calls plan / run", "Completed steps / modelled s", "Recoveries",
+                 "Latency steps", "Err", "Paired: steps / exec s / modelled s (n)", "Paired diff"],
         notes=["Steps: mean episode steps; Exec s: sim time + measured reasoning latency; Modelled s: sim time + "
                "calls x the stated per-call latency. Calls: mean reasoning calls for the plan / after it. "
                "Completed: over the trials the method succeeded. Latency: the largest recovery latency "
@@ -88,8 +99,8 @@ def table_i(records: Sequence[TrialRecord], cfg: CampaignConfig | None = None) -
     )
     cells: dict[tuple[str, str, str, str], list[TrialRecord]] = {}
     for (method, variant, condition), rs in group_by_cell(records, cfg).items():
-        for r in rs:
-            cells.setdefault((method, variant, condition, drop_p([r])), []).append(r)
+        for p, group in by_drop_p(rs).items():
+            cells[(method, variant, condition, p)] = group
     for (method, variant, condition, p), rs in cells.items():
         n = len(rs)
         ms = _metrics(rs)

@@ -49,26 +49,26 @@ def test_table_i_agentchord_row():
     assert ac["Exec s"] == "9.8"  # sim 9.25 + 0.5 s measured latency
     assert ac["Modelled s"] == "14.2"  # sim 9.25 + 5 s per call
     assert ac["Calls plan / run"] == "1.0 / 0.0"
-    assert ac["Completed: steps / modelled s"] == "1100 / 16.0"
+    assert ac["Completed steps / modelled s"] == "1100 / 16.0"
     assert ac["Recoveries"] == "1" and ac["Latency steps"] == "3" and ac["Err"] == "0"
-    assert ac["Paired vs agentchord: steps / exec s / modelled s (n)"] == "—"
+    assert ac["Paired: steps / exec s / modelled s (n)"] == "—"
 
 
 def test_table_i_paired_against_agentchord_on_the_same_seeds():
     rk = rows()["rekep"]
     assert rk["Calls plan / run"] == "1.0 / 2.0" and rk["Latency steps"] == "9" and rk["Recoveries"] == "2"
     # Seeds 0 and 1: rekep 1300 steps, 13.50 s exec, 28.0 s modelled; agentchord 1100, 11.50, 16.0.
-    assert rk["Paired vs agentchord: steps / exec s / modelled s (n)"] == \
+    assert rk["Paired: steps / exec s / modelled s (n)"] == \
         "1300.0 vs 1100.0 / 13.50 vs 11.50 / 28.0 vs 16.0 (2)"
-    assert rk["Paired diff vs agentchord"] == "+200.0 / +2.00 / +12.0"
+    assert rk["Paired diff"] == "+200.0 / +2.00 / +12.0"
 
 
 def test_table_i_methods_without_run_figures_show_dashes():
     sc = rows()["scripted"]
     assert sc["Success % [95% CI]"] == "50 [9–91]" and sc["Sim s"] == "2.0"
-    for col in ("Steps", "Exec s", "Modelled s", "Calls plan / run", "Completed: steps / modelled s",
-                "Recoveries", "Latency steps", "Paired vs agentchord: steps / exec s / modelled s (n)",
-                "Paired diff vs agentchord"):
+    for col in ("Steps", "Exec s", "Modelled s", "Calls plan / run", "Completed steps / modelled s",
+                "Recoveries", "Latency steps", "Paired: steps / exec s / modelled s (n)",
+                "Paired diff"):
         assert sc[col] == "—", col
 
 
@@ -77,3 +77,11 @@ def test_table_i_keeps_drop_probabilities_apart():
     t = table_i(records() + other, CFG)
     assert [(r[0], r[3]) for r in t.rows] == [("agentchord", "0.1"), ("agentchord", "0.05"), ("rekep", "0.1"),
                                               ("scripted", "0.1")]
+
+
+def test_table_i_counts_an_errored_trial_without_params_in_its_cell():
+    broken = TrialRecord(key="pour-single/agentchord/default/drop/4", task="pour-single", method="agentchord",
+                         variant="default", condition="drop", seed=4, error="ImportError: boom")
+    t = table_i(records() + [broken], CFG)
+    ac = dict(zip(t.columns, t.rows[0]))
+    assert len(t.rows) == 3 and ac["p"] == "0.1" and ac["n"] == "5" and ac["Err"] == "1"
