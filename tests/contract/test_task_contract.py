@@ -1,86 +1,44 @@
 """One contract over every registered task and its default variants (dm_control suite_test style).
 
-A new task passes this file or it is not done: it builds, a trial runs with no error, the
-physics steps with no MuJoCo warning and no NaN, the same seed gives the same record, and
-different seeds under condition "all" sample different hidden parameters. Broken inputs
-(unknown method, variant, condition, override) become a recorded error, never an exception.
+Built-in tasks and the toy plugins (tests/plugins) go through the same Task API and the one runner,
+with nothing written per world: a new task passes this file or it is not done. Its attributes are
+coherent (its reference and default methods exist and drive its robot, its default conditions and
+variants are its own); its reference method's trial, on the task's short `contract_overrides`
+budget, runs with no error; the physics stepped, with no MuJoCo warning and no NaN; the same seed
+gives the same record; different seeds under condition "all" draw different hidden parameters, and
+under "none" the same ones. Broken inputs (unknown method, variant, condition, override) become a
+recorded error, never an exception.
 """
 
 from __future__ import annotations
 
-import functools
 import math
-from typing import Any, Callable
+from typing import Any
 
 import kintsugi  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
 import mujoco
 import numpy as np
 import pytest
 
-from kintsugi.core.plugins import load_builtins
-
-from kintsugi.core.registry import TASKS
+from kintsugi.core.errors import ConfigError
+from kintsugi.core.plugins import load_plugins
 from kintsugi.core.record import TrialRecord, TrialSpec
-from kintsugi.core.runner import run_trial
+from kintsugi.core.registry import METHODS, TASKS
+from kintsugi.core.runner import run_trial, split_overrides
 
-load_builtins()
-BUILTIN = [e for e in TASKS if e.factory.__module__.startswith("kintsugi.")]
-"""Tasks kintsugi ships (test plugins such as tests.fake_tasks may register extra ones)."""
-CASES = [(e.name, v) for e in BUILTIN for v in e.factory().default_variants]
-
-
-def _step_peg_world(variant: str, condition: str, seed: int) -> tuple[mujoco.MjModel, mujoco.MjData]:
-    """Build the peg world directly and drive it through the taught skills (contacts included)."""
-    from kintsugi.worlds.peg.conditions import sample_params
-    from kintsugi.worlds.peg.config import PegTaskConfig
-    from kintsugi.worlds.peg.goals import full_goals, load_goals
-    from kintsugi.worlds.peg.skills import SEQUENCE, execute_skill
-    from kintsugi.worlds.peg.world import HOME_POSE, PegWorld
-
-    cfg = PegTaskConfig()
-    world = PegWorld(cfg, sample_params(cfg, variant, condition, seed))
-    goals = full_goals(load_goals(), HOME_POSE)
-    for skill in SEQUENCE:
-        execute_skill(world, skill, goals[skill])
-    world.close()
-    assert world.steps > 1000
-    return world.model, world.data
-
-
-def _step_tabletop_world(task: str, variant: str, condition: str, seed: int) -> tuple[mujoco.MjModel, mujoco.MjData]:
-    """Build a tabletop task's world directly and run its scripted sequence (grasps included)."""
-    from kintsugi.worlds.tabletop.task import run_script
-
-    factory = TASKS.get(task).factory()
-    world = run_script(factory, condition, seed, dict(getattr(factory, "contract_overrides", {})))
-    world.close()
-    assert world.steps > 1000
-    return world.model, world.data
-
-
-def _step_contact_world(task: str, variant: str, condition: str, seed: int) -> tuple[mujoco.MjModel, mujoco.MjData]:
-    """Build a contact task's evaluation world and drive it with its reference method (MPPI, contacts)."""
-    from kintsugi.worlds.contact.task import run_reference
-
-    factory = TASKS.get(task).factory()
-    world = run_reference(factory, condition, seed, overrides=dict(factory.contract_overrides))
-    world.close()
-    assert world.steps > 1000
-    return world.model, world.data
-
-
-WORLD_STEPPERS: dict[str, Callable[[str, str, int], tuple[mujoco.MjModel, mujoco.MjData]]] = {
-    "peg-insertion": _step_peg_world,
-} | {e.name: functools.partial(_step_tabletop_world, e.name) for e in BUILTIN if "tabletop" in e.tags
-     } | {e.name: functools.partial(_step_contact_world, e.name) for e in BUILTIN if "contact" in e.tags}
-"""How to build and step each task's world directly, to read MuJoCo's warning counters."""
+TOY_PLUGINS = ("tests.plugins.toy_tabletop", "tests.plugins.toy_contact", "tests.plugins.toy_method")
+load_plugins(TOY_PLUGINS)
+TASK_NAMES = [e.name for e in TASKS if "test" not in e.tags]
+"""Every registered task: the built-ins, installed plugins and the toy plugins. Entries tagged `test`
+(tests.fake_tasks' coin flips, registered when another test imports them) have no world to check."""
+CASES = [(name, v) for name in TASK_NAMES for v in TASKS.get(name).factory().default_variants]
+STATE = ("qpos", "qvel", "qacc", "act", "sensordata")
 
 
 def _spec(task: str, variant: str, seed: int = 0, condition: str = "all", **kw: Any) -> TrialSpec:
-    factory = TASKS.get(task).factory()
-    method = getattr(factory, "reference_method", "baseline")
-    kw.setdefault("overrides", dict(getattr(factory, "contract_overrides", {})))  # a task's short contract budget
-    return TrialSpec(task=task, method=method, variant=variant, condition=condition, seed=seed, **kw)
+    made = TASKS.get(task).factory()
+    kw.setdefault("overrides", dict(made.contract_overrides))  # the task's short contract budget
+    return TrialSpec(task=task, method=made.reference_method, variant=variant, condition=condition, seed=seed, **kw)
 
 
 def _floats(value: Any) -> list[float]:
@@ -98,48 +56,86 @@ def _sampled(record: TrialRecord) -> dict[str, Any]:
     return {k: v for k, v in record.params.items() if not k.startswith("tip_")}
 
 
-def test_every_builtin_task_is_covered() -> None:
-    assert BUILTIN, "no task registered by kintsugi.worlds.load_builtins()"
-    for entry in BUILTIN:
-        task = entry.factory()
-        assert task.default_variants, f"{entry.name} has no default variants"
-        assert "all" in task.conditions and "none" in task.conditions
-        assert entry.name in WORLD_STEPPERS, f"add a world stepper for task {entry.name!r} to this file"
+@pytest.fixture
+def stepped(monkeypatch: pytest.MonkeyPatch) -> dict[int, mujoco.MjData]:
+    """Every MjData that `mujoco.mj_step` advances during the test, whatever world or task owns it.
+
+    Worlds step through `mujoco.mj_step`; watching it reads the warning counters and state of any
+    task's simulation with nothing written per world. (MPPI's planning rollouts run in
+    `mujoco.rollout` on the method's beliefs, not in the world.)
+    """
+    seen: dict[int, mujoco.MjData] = {}
+    step = mujoco.mj_step
+
+    def spy(model: mujoco.MjModel, data: mujoco.MjData, *args: Any, **kwargs: Any) -> None:
+        seen.setdefault(id(data), data)
+        step(model, data, *args, **kwargs)
+
+    monkeypatch.setattr(mujoco, "mj_step", spy)
+    return seen
+
+
+def _check_physics(task: str, stepped: dict[int, mujoco.MjData]) -> None:
+    """Every simulation stepped so far: no MuJoCo warning of any kind, a finite state."""
+    assert stepped, f"{task} stepped no simulation through mujoco.mj_step"
+    for data in stepped.values():
+        warnings = {mujoco.mjtWarning(i).name: data.warning[i].number
+                    for i in range(mujoco.mjtWarning.mjNWARNING) if data.warning[i].number}
+        assert not warnings, warnings
+        for name in STATE:
+            assert np.all(np.isfinite(getattr(data, name))), name
+        assert data.time > 0
+
+
+def test_every_task_is_covered() -> None:
+    assert {"peg-insertion", "pour-single", "pick-box", "toy-lift-block", "toy-raise-cube"} <= set(TASK_NAMES)
+
+
+@pytest.mark.parametrize("task", TASK_NAMES)
+def test_task_attributes_are_coherent(task: str) -> None:
+    made = TASKS.get(task).factory()
+    assert made.name == task and made.system and made.description
+    for role, name in (("reference", made.reference_method), ("default", made.default_method or made.reference_method)):
+        entry = METHODS.get(name)  # raises, naming the registered methods, for a method that does not exist
+        assert made.method_tag in entry.tags, f"{task}'s {role} method {name!r} does not drive its robot"
+    assert "none" in made.conditions and "all" in made.conditions
+    assert made.default_conditions and set(made.default_conditions) <= set(made.conditions), made.default_conditions
+    task_overrides, method_overrides = split_overrides(dict(made.contract_overrides))
+    cfg = made.config(task_overrides)
+    METHODS.get(made.reference_method).configure(method_overrides)
+    assert made.default_variants
+    for variant in made.default_variants:
+        made.check_variant(variant, cfg)
+    with pytest.raises(ConfigError):
+        made.check_variant("no-such-variant", cfg)
 
 
 @pytest.mark.parametrize(("task", "variant"), CASES)
-def test_task_contract(task: str, variant: str) -> None:
-    # Builds and runs a trial, with no error and no NaN anywhere in the record.
+def test_task_contract(task: str, variant: str, stepped: dict[int, mujoco.MjData]) -> None:
+    # The reference method's trial: no error, physics stepped, no NaN anywhere in the record.
     first = run_trial(_spec(task, variant, seed=0))
     assert first.error is None, first.error
-    assert first.physics_steps > 0 and first.sim_time > 0 and first.skills
+    assert first.physics_steps > 0 and first.sim_time > 0
     assert all(math.isfinite(f) for f in _floats(first.model_dump(mode="python"))), first
     # Same seed -> identical record apart from wall-clock timings.
     again = run_trial(_spec(task, variant, seed=0))
     assert again.without_timings() == first.without_timings()
-    # Different seeds under "all" -> different hidden parameters (every randomized one moves).
+    # Different seeds under "all" -> different hidden parameters.
     other = run_trial(_spec(task, variant, seed=1))
     assert other.error is None, other.error
     a, b = _sampled(first), _sampled(other)
     assert a.keys() == b.keys()
-    differing = {k for k in a if a[k] != b[k]}
-    assert differing, f"seeds 0 and 1 sampled the same parameters: {a}"
-    # Stepping the world directly: no MuJoCo warning of any kind, finite state.
-    model, data = WORLD_STEPPERS[task](variant, "all", 2)
-    warnings = {mujoco.mjtWarning(i).name: data.warning[i].number
-                for i in range(mujoco.mjtWarning.mjNWARNING) if data.warning[i].number}
-    assert not warnings, warnings
-    for name in ("qpos", "qvel", "qacc", "act", "sensordata"):
-        assert np.all(np.isfinite(getattr(data, name))), name
-    assert data.ncon >= 0 and data.time > 0
+    assert {k for k in a if a[k] != b[k]}, f"seeds 0 and 1 sampled the same parameters: {a}"
+    _check_physics(task, stepped)  # every simulation the three trials stepped
 
 
-@pytest.mark.parametrize("task", [e.name for e in BUILTIN])
+@pytest.mark.parametrize("task", TASK_NAMES)
 def test_condition_none_is_the_nominal_world(task: str) -> None:
     """Seeds differ only where the condition randomizes: under "none" the hidden truth is fixed."""
-    a = run_trial(_spec(task, TASKS.get(task).factory().default_variants[0], seed=0, condition="none"))
-    b = run_trial(_spec(task, TASKS.get(task).factory().default_variants[0], seed=7, condition="none"))
-    assert a.error is None and b.error is None
+    variant = TASKS.get(task).factory().default_variants[0]
+    a = run_trial(_spec(task, variant, seed=0, condition="none"))
+    b = run_trial(_spec(task, variant, seed=7, condition="none"))
+    assert a.error is None and b.error is None, a.error or b.error
     assert _sampled(a) == _sampled(b)
 
 

@@ -58,4 +58,5 @@ TASK = ContactTaskDef(
     name="flip-box", description="T5: tip a tall box over onto its side (system C)",
     instruction="Flip the standing box over so that it lies on its side.", config_type=FlipBoxConfig, build=build,
     scorer=FlipScorer, target="box",
+    reference_method="expert-fsm",
 )

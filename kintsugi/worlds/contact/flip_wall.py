@@ -25,4 +25,5 @@ TASK = ContactTaskDef(
     name="flip-wall", description="T6: flip a flat box up by pivoting it against a curb (system C)",
     instruction="Flip the flat box up onto its end, using the curb as a fixture to pivot it against.",
     config_type=FlipWallConfig, build=build, scorer=FlipScorer, target="box",
+    reference_method="expert-fsm",
 )

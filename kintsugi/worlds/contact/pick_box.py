@@ -57,4 +57,5 @@ TASK = ContactTaskDef(
     name="pick-box", description="T2: pick a box up off the table (system C)",
     instruction="Pick up the box from the table.", config_type=PickBoxConfig, build=build,
     scorer=lambda cfg, setup: LiftScorer("box", cfg.scoring.lift_m), target="box",
+    reference_method="expert-fsm",
 )

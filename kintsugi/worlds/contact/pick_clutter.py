@@ -80,4 +80,5 @@ TASK = ContactTaskDef(
     name="pick-clutter", description="T3: pick a box out of clutter and place it on the goal disc (system C)",
     instruction="Pick up the green box from among the yellow cubes and put it down on the green disc.",
     config_type=PickClutterConfig, build=build, scorer=PlaceScorer, target="box",
+    reference_method="expert-fsm",
 )

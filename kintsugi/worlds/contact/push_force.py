@@ -86,4 +86,5 @@ TASK = ContactTaskDef(
     name="push-force", description="T4: push a box against a wall and hold about 5 N on it (system C)",
     instruction="Push the box against the wall and keep pressing it with a constant force of 5 N for 2 seconds.",
     config_type=PushForceConfig, build=build, scorer=ForceScorer, target="box",
+    reference_method="expert-fsm",
 )

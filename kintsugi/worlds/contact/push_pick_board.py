@@ -106,4 +106,5 @@ TASK = ContactTaskDef(
     instruction="Push the cutting board until its handle sticks out over the table edge, then pick the board up "
                 "by the handle.",
     config_type=PushPickBoardConfig, build=build, scorer=BoardScorer, target="board",
+    reference_method="expert-fsm",
 )

@@ -51,6 +51,10 @@ class ContactTaskDef:
     scorer: Callable[[ContactConfig, TrialSetup], Scorer]
     target: str
     """The object the task is about (sysid fits its mass and friction)."""
+    reference_method: str = "coral"
+    """The method that proves the task (the task contract runs it). `coral` needs nothing written for
+    the task (the instruction's words choose its costs); `expert-fsm` and `mppi-sysid` need a hand-written
+    expert in `kintsugi.methods.expert.designs`, so only a task that has one names `expert-fsm`."""
 
 
 def corners(geo: Geometry) -> np.ndarray:

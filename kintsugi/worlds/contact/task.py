@@ -68,7 +68,6 @@ class ContactTask(Task):
     variants_help = "default (one variant; sizes, masses, frictions and poses are randomized by the condition)"
     default_variants = VARIANTS
     conditions = CONDITIONS
-    reference_method = "expert-fsm"
     default_method = "coral"
     contract_overrides = {"control.samples": 16, "control.episode_s": 2.5}
     """What the task contract runs with: the real planner and physics on a short budget (16 samples,
@@ -82,6 +81,7 @@ class ContactTask(Task):
         self.name = spec.name
         self.description = spec.description
         self.config_type = spec.config_type
+        self.reference_method = spec.reference_method
 
     def setup(self, cfg: ContactConfig, condition: str, seed: int) -> TrialSetup:
         return self.spec.build(cfg, Drawer(condition, seed))

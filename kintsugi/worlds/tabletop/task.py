@@ -138,16 +138,6 @@ def expand(entry: object, robot: TabletopRobot) -> list:
     return [entry]
 
 
-def run_script(task: TabletopTask, condition: str, seed: int, overrides: dict | None = None) -> TabletopWorld:
-    """Build a trial's world and run the task's scripted sequence on it (no method, no record)."""
-    world, _, drop, _ = task.build(task.config(overrides or {}), condition, seed)
-    robot = TabletopRobot(world, hook=drop)
-    for entry in task.spec.script(robot.observation(images=False)):
-        for action in expand(entry, robot):
-            robot.execute(action)
-    return world
-
-
 def register(spec: TaskSpec, task_type: type[TabletopTask] = TabletopTask) -> None:
     """Put one declared tabletop task in the task registry."""
     TASKS.register(spec.name, spec.description, tags=("system-b", "tabletop"))(lambda: task_type(spec))
