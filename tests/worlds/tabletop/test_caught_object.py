@@ -51,6 +51,7 @@ def test_every_spot_is_clear_and_nearest_first(others, x, y) -> None:  # noqa: A
     assert d == sorted(d)
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("task", "seed", "most_steps"), [("pour-dual", 86, 2100), ("pour-single", 1, 1300)])
 def test_a_bottle_caught_in_the_open_hand_is_stood_up_clear_of_the_rest(task: str, seed: int, most_steps: int) -> None:
     """At drop p 0.10 the bottle drops as the hand turns back from pouring and stays across the open fingers.

@@ -129,6 +129,7 @@ def lifted() -> dict[str, object]:
     return out
 
 
+@pytest.mark.slow
 def test_pinch_lifts_both_corners_by_friction(lifted: dict) -> None:
     assert lifted["touch"] == {"left": 2, "right": 2}
     assert all(z > 0.06 for z in lifted["lift_z"].values()), lifted["lift_z"]
@@ -136,6 +137,7 @@ def test_pinch_lifts_both_corners_by_friction(lifted: dict) -> None:
     _no_warnings(lifted["world"])
 
 
+@pytest.mark.slow
 def test_an_opened_gripper_lets_go_of_its_corner(lifted: dict) -> None:
     """The drop disturbance's forced opening ends the pinch: fully open, at most one pad brushing the
     cloth with next to no force. (The corner need not fall: here it hangs draped over the open pad,
@@ -146,6 +148,7 @@ def test_an_opened_gripper_lets_go_of_its_corner(lifted: dict) -> None:
     assert right[0].get(TOWEL) == 2 and lifted["after_drop_z"]["right"] > 0.06  # the other arm still holds
 
 
+@pytest.mark.slow
 def test_too_weak_a_pinch_loses_the_corner() -> None:
     """Friction only: with a feeble squeeze the pinched corners slide out of the pads on the lift."""
     world, robot, _ = _grasped({"robot.grip_force_n": 0.02})
@@ -155,6 +158,7 @@ def test_too_weak_a_pinch_loses_the_corner() -> None:
     world.close()
 
 
+@pytest.mark.slow
 def test_drop_condition_releases_a_held_corner() -> None:
     """Under `drop` with p = 1 the first action after the pinch opens a gripper at a random instant."""
     world, robot, _ = _grasped({"disturbance.drop_p": 1.0}, condition="drop")
@@ -168,6 +172,7 @@ def test_drop_condition_releases_a_held_corner() -> None:
     world.close()
 
 
+@pytest.mark.slow
 def test_scripted_fold_with_perceived_corners_folds_and_lets_go() -> None:
     """The whole scripted fold on a randomized pose from perceived corners: the pinch (6 N) lets the
     cloth go when the pads open (at 20 N the pads press through the coarse cloth and drag it off on

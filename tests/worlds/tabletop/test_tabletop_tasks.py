@@ -36,7 +36,7 @@ def _play(task: str, edit: Callable[[list[dict[str, Any]]], list[dict[str, Any]]
 def test_scripted_method_solves_the_task(task: str) -> None:
     record = run_trial(TrialSpec(task=task, method="scripted", variant="default", condition="pose", seed=3))
     assert record.error is None, record.error
-    assert record.success and record.framework_success, record.details
+    assert record.success and record.framework_success, record.task_figures
     assert all(s.reached for s in record.skills)
 
 
