@@ -17,7 +17,11 @@ import os
 import platform
 import statistics
 import sys
+import threading
 import time
+import uuid
+from collections import deque
+from http.server import BaseHTTPRequestHandler, ThreadingHTTPServer
 from pathlib import Path
 
 import cv2
@@ -27,18 +31,105 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from kintsugi.reasoning.base import RecordingReasoner  # noqa: E402
 from kintsugi.reasoning.openai_backend import OpenAIReasoner  # noqa: E402
+from kintsugi.reasoning.roles import ask  # noqa: E402
+from kintsugi.methods.recovery import roles  # noqa: E402,F401 - registers judge, analyze and plan
 from kintsugi.methods.recovery.types import (  # noqa: E402
     AnalyzeReply,
     AnalyzeRequest,
-    CameraCalibration,
-    CheckResult,
     JudgeReply,
     JudgeRequest,
     PlanRequest,
-    Pose,
     SkillOutcome,
 )
-from tests.fake_openai_server import FakeOpenAIServer, content, tool_calls  # noqa: E402
+from kintsugi.perception.types import CameraCalibration, CheckResult, Pose  # noqa: E402
+
+
+def content(reply: object) -> dict:
+    """A scripted assistant reply: dicts are JSON-encoded, strings sent verbatim."""
+    return {"content": reply if isinstance(reply, str) else json.dumps(reply)}
+
+
+def tool_calls(*calls: tuple[str, dict]) -> dict:
+    """A scripted reply of tool calls (name, arguments)."""
+    return {"content": None, "tool_calls": [
+        {"id": f"call_{uuid.uuid4().hex[:12]}", "type": "function", "function": {"name": n, "arguments": json.dumps(a)}}
+        for n, a in calls]}
+
+
+class FakeOpenAIServer:
+    """A local chat-completions endpoint on 127.0.0.1 answering scripted replies in order, so the bench measures
+    the client's own cost. With `refuse`, it answers HTTP 400 to json_schema or tool_choice=required requests,
+    as some local servers do, without consuming a reply."""
+
+    def __init__(self, refuse: tuple[str, ...] | set[str] = ()) -> None:
+        self.refuse, self.refused = set(refuse), 0
+        self.replies: deque[dict] = deque()
+        self.requests: list[dict] = []
+        self._httpd = ThreadingHTTPServer(("127.0.0.1", 0), self._handler())
+        self._httpd.daemon_threads = True
+
+    @property
+    def base_url(self) -> str:
+        host, port = self._httpd.server_address[:2]
+        return f"http://{host}:{port}/v1"
+
+    def push(self, *replies: dict) -> None:
+        self.replies.extend(replies)
+
+    def start(self) -> "FakeOpenAIServer":
+        threading.Thread(target=self._httpd.serve_forever, kwargs={"poll_interval": 0.02}, daemon=True).start()
+        return self
+
+    def stop(self) -> None:
+        self._httpd.shutdown()
+        self._httpd.server_close()
+
+    def _refusal(self, body: dict) -> str | None:
+        """The error message (worded like local servers') for a request whose strict options this server refuses."""
+        if "json_schema" in self.refuse and (body.get("response_format") or {}).get("type") == "json_schema":
+            return "response_format type 'json_schema' is not supported by this server; use 'text' or 'json_object'"
+        if "tool_choice" in self.refuse and body.get("tool_choice") == "required":
+            return "tool_choice 'required' is not supported; only 'auto' and 'none' are"
+        return None
+
+    def _handler(self) -> type[BaseHTTPRequestHandler]:
+        server = self
+
+        class Handler(BaseHTTPRequestHandler):
+            protocol_version = "HTTP/1.1"
+            disable_nagle_algorithm = True  # no 40 ms delayed-ACK stalls per reply
+
+            def log_message(self, *args: object) -> None:
+                pass
+
+            def do_POST(self) -> None:  # noqa: N802 - stdlib name
+                body = json.loads(self.rfile.read(int(self.headers.get("Content-Length", 0))))
+                server.requests.append(body)
+                refusal = server._refusal(body)
+                if refusal:
+                    server.refused += 1
+                    status, payload = 400, {"error": {"message": refusal, "type": "invalid_request_error", "code": None}}
+                elif server.replies:
+                    message = {"role": "assistant", "refusal": None, **server.replies.popleft()}
+                    status, payload = 200, {
+                        "id": f"chatcmpl-{uuid.uuid4().hex}", "object": "chat.completion", "created": int(time.time()),
+                        "model": body.get("model", "fake"),
+                        "choices": [{"index": 0, "message": message, "logprobs": None,
+                                     "finish_reason": "tool_calls" if message.get("tool_calls") else "stop"}],
+                        "usage": {"prompt_tokens": 100, "completion_tokens": 20, "total_tokens": 120}}
+                else:
+                    status, payload = 500, {"error": {"message": "fake server: no scripted reply left", "type": "bench"}}
+                data = json.dumps(payload).encode()
+                self.send_response(status)
+                self.send_header("Content-Type", "application/json")
+                self.send_header("Content-Length", str(len(data)))
+                if status == 500:
+                    self.send_header("x-should-retry", "false")
+                self.end_headers()
+                self.wfile.write(data)
+
+        return Handler
+
 
 SKILLS = {"fit": ["y"], "align": ["y"], "insert": ["z"]}
 GOALS = {"fit": Pose(y=10, z=5), "align": Pose(y=12, z=5), "insert": Pose(y=12, z=-20)}
@@ -106,9 +197,9 @@ def main() -> None:
     try:
         for i in range(args.n):
             judge, analyze, plan = requests(i)
-            reasoner.judge(judge)
-            reasoner.analyze(analyze)
-            reasoner.plan(plan)
+            ask(reasoner, "judge", judge)
+            ask(reasoner, "analyze", analyze)
+            ask(reasoner, "plan", plan)
     finally:
         if server is not None:
             server.stop()

@@ -1,4 +1,4 @@
-"""What sandboxed cost code costs inside MPPI (issue target: <= 10 % of the iteration).
+"""What sandboxed cost code costs inside MPPI (target: <= 10 % of the iteration).
 
 One run, in rotating order so machine drift hits every variant alike: an MPPI step on the
 pusher-and-box scene (K samples, 0.5 s horizon) whose cost is (a) plain numpy written by
@@ -27,9 +27,36 @@ import numpy as np  # noqa: E402
 from kintsugi.campaign.report import machine_info  # noqa: E402
 from kintsugi.control import MPPI, MPPIConfig  # noqa: E402
 from kintsugi.sandbox import CostProgram, probe  # noqa: E402
-from tests.control_fixtures import pusher_box  # noqa: E402
 
 GOAL = np.array([0.35, 0.05, 0.025])
+PUSHER_BOX = """
+<mujoco model="pusher_box">
+  <option timestep="0.01" cone="elliptic" impratio="3"/>
+  <worldbody>
+    <geom name="table" type="plane" size="2 2 0.1" friction="0.1 0.005 0.0001"/>
+    <body name="pusher" pos="0 0 0.025">
+      <joint name="px" type="slide" axis="1 0 0" damping="1"/>
+      <joint name="py" type="slide" axis="0 1 0" damping="1"/>
+      <geom name="pusher" type="sphere" size="0.025" mass="1" friction="0.1 0.005 0.0001"/>
+      <site name="tip"/>
+    </body>
+    <body name="box" pos="0.1 0 0.025">
+      <freejoint name="box"/>
+      <geom name="box" type="box" size="0.05 0.05 0.025" mass="0.5" friction="0.5 0.005 0.0001"/>
+    </body>
+  </worldbody>
+  <actuator>
+    <position name="ax" joint="px" kp="400" kv="40" ctrlrange="-0.5 0.5" forcerange="-15 15"/>
+    <position name="ay" joint="py" kp="400" kv="40" ctrlrange="-0.5 0.5" forcerange="-15 15"/>
+  </actuator>
+  <sensor>
+    <framepos name="box_pos" objtype="body" objname="box"/>
+    <framepos name="tip_pos" objtype="site" objname="tip"/>
+  </sensor>
+</mujoco>
+"""
+"""A force-limited planar pusher (a 1 kg sphere on two critically damped position-driven slides) and a flat
+0.5 kg box on a low-friction table: the scene of the controller's own tests."""
 SOURCE = '''
 def push(box, tip, ctrl, goal_pos):
     """Box to the goal, pusher kept behind the box, small commands."""
@@ -54,7 +81,7 @@ def main() -> None:
     args = ap.parse_args()
     source = SOURCE
     variables = {"box", "tip", "ctrl", "goal_pos"}
-    model, data = pusher_box()
+    model = mujoco.MjModel.from_xml_string(PUSHER_BOX)
     K = args.samples
     program = CostProgram.compile(source, variables)
     cost_s = {"native": [], "sandbox": []}

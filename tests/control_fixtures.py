@@ -2,8 +2,8 @@
 
 The pusher is a sphere on two slide joints (x, y) driven by position actuators with a force
 range; the box is a free body on a low-friction table, so contacts with it use the box's
-friction (MuJoCo takes the larger of a pair). Used by tests and by bench/bench_mppi.py and
-bench/bench_sysid.py.
+friction (MuJoCo takes the larger of a pair). Used by the controller's tests (bench/bench_sandbox.py
+carries its own copy of the scene).
 """
 
 from __future__ import annotations
