@@ -38,13 +38,12 @@ def measure(name: str, repeats: int) -> dict[str, float]:
     from kintsugi.methods.mppi.execute import mppi_config
     from kintsugi.worlds.contact.robot import ContactRobot
     from kintsugi.worlds.contact.world import PlanningWorld
-    from kintsugi.core.record import TrialSpec
+    from kintsugi.core.record import ReasonerSettings
 
     task = TASKS.get(name).factory()
     cfg = task.config({})
     world, _, setup = task.build(cfg, "all", 0)
-    ctx = task.context(cfg, setup, False, TrialSpec(task=name, method="coral", variant="default", condition="all",
-                                                    seed=0))
+    ctx = task.context(cfg, setup, False, ReasonerSettings(), 0)
     obs = ContactRobot(world).observe()
     req = Coral(ctx, VARIANTS["coral"]).scene_request(obs, {})
     steps = round(cfg.control.horizon_s / cfg.sim.planning_timestep_s)

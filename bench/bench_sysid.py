@@ -10,7 +10,7 @@ read here, by the benchmark, only to score).
 Last line: one JSON object with mass_error, friction_error (worst over the trials and
 tasks run), cycles (most used), and per-task figures.
 Usage: .venv/bin/python bench/bench_sysid.py [--tasks push-pick-board,push-force] [--seeds 0,1,2]
-(any contact task works: its `target` object is fitted; T1 and T4 are the issue's targets)
+(any contact task works: its `target` object is fitted)
 
 The sensitivity study (CoRAL's T1 study): `--prior coral --all-cycles --seeds 0-9`. The prior is then
 the physics-priors role's guess (embedded backend: a material table times the object's known volume,
@@ -33,14 +33,14 @@ import kintsugi  # noqa: E402,F401 - sets MUJOCO_GL
 import kintsugi.methods.builtin  # noqa: E402,F401
 from bench_mppi import machine  # noqa: E402
 from kintsugi.core.plugins import load_builtins  # noqa: E402
-from kintsugi.core.registry import TASKS
+from kintsugi.core.registry import TASKS  # noqa: E402
 from kintsugi.methods.mppi.execute import run_attempt  # noqa: E402
 from kintsugi.methods.expert.designs import expert_design  # noqa: E402
 from kintsugi.methods.mppi.identify import BeliefFitter  # noqa: E402
 from kintsugi.worlds.contact.robot import ContactRobot  # noqa: E402
 from kintsugi.worlds.contact.world import PlanningWorld  # noqa: E402
-from kintsugi.core.log import TrialLog
-from kintsugi.core.record import TrialSpec
+from kintsugi.core.log import TrialLog  # noqa: E402
+from kintsugi.core.record import ReasonerSettings  # noqa: E402
 
 MAX_CYCLES = 4
 CONVERGED = 0.05
@@ -64,8 +64,7 @@ def one(task_name: str, seed: int, prior: str = "scaled", all_cycles: bool = Fal
     task = TASKS.get(task_name).factory()
     cfg = task.config({})
     world, scorer, setup = task.build(cfg, "random", seed)
-    spec = TrialSpec(task=task_name, method="mppi-sysid", variant="default", condition="random", seed=seed)
-    ctx = task.context(cfg, setup, False, spec)  # no oracle: the method's own view
+    ctx = task.context(cfg, setup, False, ReasonerSettings(), seed)  # no oracle: the method's own view
     obj = task.spec.target
     beliefs0 = MPPISysId(ctx).prior() if prior == "scaled" else MPPISysId(ctx).prior() | coral_prior(ctx)
     planning = PlanningWorld(cfg, ctx.known, beliefs0)

@@ -11,13 +11,12 @@ def coral_scene(task_name: str, seed: int) -> tuple[Any, Any, Any, Any, Any]:
     import kintsugi.worlds.contact.tasks  # noqa: F401
     from kintsugi.methods.coral.method import VARIANTS, Coral
     from kintsugi.core.registry import TASKS
+    from kintsugi.core.record import ReasonerSettings
     from kintsugi.worlds.contact.robot import ContactRobot
-    from kintsugi.core.record import TrialSpec
 
     task = TASKS.get(task_name).factory()
     cfg = task.config({})
     world, _, setup = task.build(cfg, "all", seed)
-    ctx = task.context(cfg, setup, False, TrialSpec(task=task_name, method="coral", variant="default",
-                                                    condition="all", seed=seed))
+    ctx = task.context(cfg, setup, False, ReasonerSettings(), seed)
     obs = ContactRobot(world).observe()
     return ctx, cfg, obs, Coral(ctx, VARIANTS["coral"]).scene_request(obs, {}), world

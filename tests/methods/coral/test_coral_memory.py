@@ -17,14 +17,13 @@ def _coral(tmp_path, variant: str, seed: int):  # noqa: ANN001, ANN202
     import kintsugi.worlds.contact.tasks  # noqa: F401
     from kintsugi.methods.coral.method import VARIANTS, Coral
     from kintsugi.core.registry import TASKS
+    from kintsugi.core.record import ReasonerSettings
     from kintsugi.worlds.contact.robot import ContactRobot
-    from kintsugi.core.record import TrialSpec
 
     task = TASKS.get("push-force").factory()
     cfg = task.config({"coral.memory_path": str(tmp_path / "mem.sqlite")})
     world, _, setup = task.build(cfg, "all", seed)
-    ctx = task.context(cfg, setup, False, TrialSpec(task="push-force", method=variant, variant="default",
-                                                    condition="all", seed=seed))
+    ctx = task.context(cfg, setup, False, ReasonerSettings(), seed)
     method = Coral(ctx, VARIANTS[variant])
     req = method.scene_request(ContactRobot(world).observe(), {"box": ObjectPrior(mass_kg=0.04, friction=0.5)})
     world.close()

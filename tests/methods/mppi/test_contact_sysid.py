@@ -6,7 +6,6 @@ import kintsugi  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
 import numpy as np
 import pytest
 
-import kintsugi.methods.builtin  # noqa: F401
 from kintsugi.control.sysid import SysIdConfig
 from kintsugi.methods.expert.method import MPPISysId
 from kintsugi.core.plugins import load_builtins
@@ -14,17 +13,17 @@ from kintsugi.core.registry import TASKS
 from kintsugi.methods.mppi.identify import BeliefFitter, raw_ft, windows
 from kintsugi.worlds.contact.robot import ContactRobot
 from kintsugi.worlds.contact.world import PlanningWorld, tared_force_world
-from kintsugi.core.record import TrialSpec
+from kintsugi.core.record import ReasonerSettings
 
 load_builtins()
 
 
-def _ctx(condition: str, seed: int, method: str = "mppi-sysid"):  # noqa: ANN202
+def _ctx(condition: str, seed: int):  # noqa: ANN202
+    """The push-force trial's pieces and mppi-sysid's context (no oracle physics)."""
     task = TASKS.get("push-force").factory()
     cfg = task.config({})
     world, scorer, setup = task.build(cfg, condition, seed)
-    spec = TrialSpec(task="push-force", method=method, variant="default", condition=condition, seed=seed)
-    return task, cfg, world, setup, task.context(cfg, setup, False, spec)
+    return task, cfg, world, setup, task.context(cfg, setup, False, ReasonerSettings(), seed)
 
 
 def test_the_prior_comes_from_the_catalogue_never_from_the_trial() -> None:
@@ -62,6 +61,7 @@ def _pushed(sysid: SysIdConfig):  # noqa: ANN202
     return fitter, planning, setup
 
 
+@pytest.mark.slow
 def test_sysid_pulls_an_8x_1_8x_prior_toward_the_truth_from_the_robots_log() -> None:
     fitter, planning, setup = _pushed(SysIdConfig(grid=9, zoom_rounds=2, max_evals=40, nthread=2, substeps=5))
     assert len(fitter.logs) >= 2
