@@ -331,8 +331,11 @@ def explain(
     path: Annotated[Path, typer.Argument(help="a trial record (.json) or a campaign's results.jsonl")],
     key: Annotated[Optional[str], typer.Option(
         help="trial key when PATH holds many records: task/method/variant/condition/seed (or with __)")] = None,
+    full: Annotated[bool, typer.Option("--full", help="also print every reasoning call's request and reply, "
+                                       "and the figures' long texts (cost code)")] = False,
 ) -> None:
-    """Print a trial's story: each skill, its verdict, and the full reasoning transcript."""
+    """Print a trial as one timeline: skills with their outcome, events and reasoning calls in sim-time
+    order, then its figures and its outcome."""
     from kintsugi.cli.explain import explain_record, load_record
 
     try:
@@ -340,7 +343,7 @@ def explain(
     except KintsugiError as exc:
         _fail(exc)
         return
-    explain_record(rec, console)
+    explain_record(rec, console, full=full)
 
 
 @app.command()

@@ -9,7 +9,6 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-import numpy as np
 import pytest
 from typer.testing import CliRunner
 
@@ -17,7 +16,7 @@ from kintsugi.cli import _record_path, app
 from kintsugi.core.errors import ReasoningError
 from kintsugi.reasoning import REASONERS
 from kintsugi.methods.recovery.types import AnalyzeReply, JudgeReply, PlanReply, PlanStep, RelativeMotion
-from kintsugi.core.record import Event, ReasonerSettings, SkillLog, TrialRecord, TrialSpec
+from kintsugi.core.record import ReasonerSettings, TrialRecord, TrialSpec
 
 MARKUP = "[/INST] [bold]not bold[/x]"
 
@@ -139,56 +138,6 @@ def test_version() -> None:
     assert res.exit_code == 0 and res.output.strip() == f"kintsugi {version('kintsugi')}"
 
 
-# ----- explain ---------------------------------------------------------------------------------
-
-def _markup_record() -> TrialRecord:
-    call = {"role": "judge", "backend": MARKUP, "reply": {"success": False, "explanation": MARKUP},
-            "latency_s": 0.01, "tokens_in": 1, "tokens_out": 2}
-    skills = [SkillLog(skill="approach", goal={"y": 1.0}, terminal={"y": 1.0}, reached=True, sim_time=0.5),
-              SkillLog(skill="fit", goal={"y": 2.0}, terminal={"y": 2.0}, reached=True, verdict=False,
-                       message=MARKUP, sim_time=1.0),
-              SkillLog(skill="fit", goal={"y": 3.0}, terminal={"y": 3.0}, reached=True, recovery=True,
-                       verdict=True, sim_time=1.0)]
-    return TrialRecord(
-        key="peg-insertion/recovery/square/all/0", task="peg-insertion", method="recovery", variant="square",
-        condition="all", seed=0, params={"note": MARKUP}, skills=skills,
-        events=[Event(t=1.5, kind="plan-clamped", detail=f"step 1 {MARKUP}"),
-                Event(t=2.5, kind="[bold]", detail=MARKUP)],
-        transcript=[call, {**call, "role": "analyze"}, {**call, "role": "plan"},
-                    {**call, "reply": None, "error": MARKUP}],
-        error=f"ReasoningError: {MARKUP}")
-
-
-def test_explain_prints_markup_like_text_in_every_field(tmp_path: Path) -> None:
-    path = tmp_path / "r.json"
-    path.write_text(_markup_record().model_dump_json())
-    res = invoke("explain", path)
-    assert res.exit_code == 0, res.output
-    out = res.output
-    for text in (f'"note": "{MARKUP}"', f'"explanation": "{MARKUP}"', f"judge ({MARKUP}", f"error: {MARKUP}",
-                 f"plan-clamped: step 1 {MARKUP}", f"event 2.50s [bold]: {MARKUP}", f"error: ReasoningError: {MARKUP}"):
-        assert text in out, text
-    # The clamp happened after the first fit's reasoning, before the recovery fit ran.
-    assert out.index("plan (") < out.index("plan-clamped") < out.index("fit (recovery)")
-
-
-def test_explain_key_accepts_both_forms_and_bad_files_are_one_line_errors(tmp_path: Path) -> None:
-    rec = _markup_record()
-    other = rec.model_copy(update={"key": "peg-insertion/recovery/square/all/1", "seed": 1})
-    results = tmp_path / "results.jsonl"
-    results.write_text(rec.model_dump_json() + "\n" + other.model_dump_json() + "\n")
-    for key in ("peg-insertion/recovery/square/all/1", "peg-insertion__recovery__square__all__1"):
-        res = invoke("explain", results, "--key", key)
-        assert res.exit_code == 0 and "peg-insertion/recovery/square/all/1" in res.output
-    assert invoke("explain", tmp_path, "--key", "peg-insertion__recovery__square__all__0").exit_code == 0
-    res = invoke("explain", results)
-    assert res.exit_code == 2 and "holds 2 records" in res.stderr
-    (tmp_path / "bad.json").write_text("{not json")
-    for path in (tmp_path / "bad.json", tmp_path / "missing.json"):
-        res = invoke("explain", path)
-        assert res.exit_code == 2 and res.stderr.startswith("error:")
-
-
 # ----- bench -----------------------------------------------------------------------------------
 
 @pytest.mark.parametrize("args, message", [
@@ -260,26 +209,7 @@ def test_bench_suite_of_a_task_without_suites(tmp_path: Path) -> None:
     assert res.exit_code == 2 and "this task has no named suites" in res.output
 
 
-# ----- video -----------------------------------------------------------------------------------
-
-def test_video_overlay_sits_below_the_scene_and_ends_with_the_scored_outcome(tmp_path: Path) -> None:
-    from kintsugi.core.video import BAND_PX, VideoRecorder
-
-    rec = VideoRecorder(fps=10, scale=1, hold_s=0.2)
-    scene = np.full((240, 320, 3), 90, dtype=np.uint8)
-    rec.status("CF4 insert")
-    rec.add(scene, 0.0)
-    rec.status("CF4 insert", "last verdict: insert SUCCESS")  # ends the run: held, so it is seen
-    assert len(rec.frames) == 1 + rec.hold_frames
-    rec.finish("outcome: ground truth G SUCCESS, framework F success", True)
-    assert len(rec.frames) == 1 + 3 * rec.hold_frames
-    for frame in rec.frames:
-        assert frame.shape == (240 + BAND_PX, 320, 3)
-        assert (frame[:240] == 90).all()  # the scene is never drawn over
-    text_rows = lambda f: int((f[240:].max(axis=(1, 2)) > 0).sum())  # noqa: E731
-    assert text_rows(rec.frames[-1]) > text_rows(rec.frames[-1 - 2 * rec.hold_frames]) > text_rows(rec.frames[0])
-    assert rec.save(tmp_path / "v.gif").stat().st_size > 0
-
+# ----- trial log -----------------------------------------------------------------------------
 
 def test_trial_log_lines_are_verbatim_unless_marked_up() -> None:
     from rich.console import Console

@@ -107,20 +107,3 @@ def test_embedded_reasoner_never_imports_the_simulator() -> None:
             "print(bad); sys.exit(1 if bad else 0)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 0, out.stdout + out.stderr
-
-
-def test_explain_tells_each_skill_with_its_reasoning_calls(tmp_path) -> None:  # noqa: ANN001
-    from rich.console import Console
-
-    from kintsugi.cli.explain import explain_record, load_record
-
-    Scripted.verdicts = [False, True, True, True]
-    Scripted.plan_reply = PlanReply(steps=[PlanStep(skill="fit", goal={"y": 2.0})])
-    path = tmp_path / "rec.json"
-    path.write_text(_run().model_dump_json())
-    console = Console(record=True, width=120)
-    explain_record(load_record(path), console)
-    text = console.export_text()
-    order = [text.index(w) for w in ("fit goal", "judge (scripted", "analyze (scripted", "plan (scripted",
-                                     "fit (recovery)", "align (recovery)", "insert (recovery)")]
-    assert order == sorted(order)
