@@ -107,6 +107,7 @@ def call_keys(rec: TrialRecord, skills: list[Key], events: list[Key]) -> list[tu
     3. CoRAL's n-th `adapt` call just before the n-th `restart` event (the log entry that follows it);
        a re-plan's composer call (every composer call after the first) just after its `replan` event;
     4. planning calls (composer, arranger, priors, formulate) made before any other call: at the start;
+       a failed call no rule above placed: just before the trial's `error` event (it ended the trial);
     5. any other call (e.g. a re-planner's verify calls) right after the nearest placed call before
        it, or at the start when none is: a lower bound, marked inferred.
     """
@@ -114,6 +115,7 @@ def call_keys(rec: TrialRecord, skills: list[Key], events: list[Key]) -> list[tu
     checked = [k for k, s in zip(skills, rec.skills) if s.verdict is not None]
     restarts = [k for k, e in zip(events, rec.events) if e.kind == "restart"]
     replans = [k for k, e in zip(events, rec.events) if e.kind == "replan"]
+    errors = [k for k, e in zip(events, rec.events) if e.kind == "error"]
     out: list[tuple[Key, bool] | None] = []
     judged = adapted = composed = 0
     judge_key: Key | None = None
@@ -136,6 +138,8 @@ def call_keys(rec: TrialRecord, skills: list[Key], events: list[Key]) -> list[tu
             key = replans[composed - 1][:3] + (1, j)
         elif leading:
             key = (0.0, 0, 0, 0, j)
+        elif call.get("error") and errors:  # the failed call ended the trial: just before its error event
+            key = errors[0][:3] + (-1, j)
         judged += role == "judge"
         adapted += role == "adapt"
         composed += role == "composer"

@@ -266,3 +266,14 @@ def test_explain_key_accepts_both_forms_and_bad_files_are_one_line_errors(tmp_pa
     for path in (tmp_path / "bad.json", tmp_path / "missing.json"):
         res = invoke("explain", path)
         assert res.exit_code == 2 and res.stderr.startswith("error:")
+
+
+def test_a_failed_call_sits_before_the_error_it_caused() -> None:
+    rec = peg_record()
+    rec = rec.model_copy(update={
+        "skills": [*rec.skills, skill("align", 4.0)],
+        "events": [*rec.events, Event(t=4.0, kind="error", detail="ReasoningError: endpoint gone")],
+        "transcript": [*rec.transcript, call("judge", None, error="ReasoningError: endpoint gone")]})
+    order = positions(render(rec), "4.00 s skill align -> reached", "4.00 s reason judge (embedded, 0.010 s): error:",
+                      "4.00 s event error: ReasoningError")
+    assert order == sorted(order)
