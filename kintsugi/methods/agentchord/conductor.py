@@ -19,102 +19,31 @@ measured in control steps from the firing to the recovery's first command (`Metr
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Any, Callable, Literal
+from typing import Any, Callable
 
 import numpy as np
 from rich.markup import escape
 
-from kintsugi.core.config import StrictModel
-from kintsugi.core.errors import KintsugiError
+from kintsugi.core.log import TrialLog
+from kintsugi.core.record import SkillLog
+from kintsugi.methods.agentchord.conducting import ConductorConfig, ConductorError, Metrics, objects_of, proprioceptive
 from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes
 from kintsugi.methods.agentchord.observe import ARMS, features
+from kintsugi.methods.agentchord.recovering import Recovering
+from kintsugi.methods.agentchord.settling import SETTLE_TRIES, Settling
 from kintsugi.methods.agentchord.synthesis import EdgeSynthesis
 from kintsugi.methods.agentchord.tops import Heads, Tops
 from kintsugi.perception.features import ObjectFeatures
 from kintsugi.taskgraph.features import Features
-from kintsugi.taskgraph.forward import cost_to_go, guarded_next_edge, next_edge
+from kintsugi.taskgraph.forward import cost_to_go, next_edge
 from kintsugi.taskgraph.model import Edge, TaskGraph
 from kintsugi.taskgraph.monitor import Firing, MonitorBank
-from kintsugi.core.record import SkillLog
-from kintsugi.core.log import TrialLog
 
 
-SETTLE_M = 0.0003
-"""Two reads of every watched centroid this close (about 0.1 s apart)... (renders are deterministic, so a
-still object reads the same twice; a bottle rocking on its base after a drop moves its centroid ~1 mm)"""
-SETTLE_DEG = 0.2
-"""...and of every watched principal axis this close in angle: the objects are at rest."""
-SETTLE_READS = 2
-"""Consecutive still pairs required (one pair can alias with a rocking object's period)."""
-SETTLE_TRIES = 25
-CAUGHT_CLEAR_M = 0.02
-"""An object whose lowest perceived point is this far above the table does not rest on it."""
-MAX_SET_DOWNS = 2
-SET_DOWN_TRIES = 6
-SET_DOWN_MARGIN_M = 0.03
-"""A caught object is set down this far (beyond both objects' half extents) from every other object."""
+class Conductor(Recovering, Settling):
+    """Runs one compiled graph to its goal: nominal edges under their monitors, recoveries (`Recovering`) after
+    a firing, settles (`Settling`) before a recovery or the goal check reads the scene."""
 
-
-class ConductorError(KintsugiError):
-    """The conductor cannot go on (action budget spent, a recovery node with no way back)."""
-
-
-class ConductorConfig(StrictModel):
-    max_actions: int = 200
-    """Atomic actions per episode before the conductor gives up (a recovery loop never ends a trial hanging)."""
-    max_recoveries: int = 10
-    """Recoveries (or backtracks) per episode before the conductor gives up."""
-    on_failure: Literal["branch", "backtrack"] = "branch"
-    """branch: the pre-compiled forward recovery (AgentChord); backtrack: back to the latest nominal node whose
-    sub-goal still holds and re-run the nominal edges from there (AC-BT, ReKep-style)."""
-
-
-@dataclass
-class Metrics:
-    episode_steps: int = 0
-    """Control steps spent in atomic actions (the paper's episode steps)."""
-    actions: int = 0
-    recoveries: int = 0
-    recovery_latency_steps: list[int] = field(default_factory=list)
-    """Per recovery: control steps from the monitor's firing to the recovery's first command."""
-    firings: list[str] = field(default_factory=list)
-    keyframe_solves: int = 0
-    fired_at: int | None = None
-    """Control step of the latest firing whose recovery has not issued its first command yet."""
-
-
-def proprioceptive(check: Any) -> bool:
-    """A check that reads only the arms' own sensors (no perceived object geometry): per-control-step."""
-    return all(role == "arm" or feature is None for _, role, feature in check.refs())
-
-
-def _moves(edge: Edge) -> bool:
-    """The edge moves an arm (anything but opening a hand, which the settle before it has just done while the
-    objects came to rest)."""
-    return any(a.name != "open_gripper" for a in edge.actions)
-
-
-def _guard_objects(graph: TaskGraph, node: str) -> set[str]:
-    return {e for x in graph.out_edges(node) for c in x.guard for e, role, _ in c.refs() if role != "arm"}
-
-
-def firing_arm(edge: Edge, firing: Firing) -> str | None:
-    """The arm the fired monitor watches (the first arm any of the edge's monitors reads when it names none)."""
-    mine = [m for m in edge.monitors if m.id == firing.monitor] or list(edge.monitors)
-    return next((e for m in mine for e, role, _ in m.check.refs() if role == "arm"), None)
-
-
-def _objects_of(edge: Edge) -> set[str]:
-    names: set[str] = set()
-    for m in edge.monitors:
-        for entity, role, _ in m.check.refs():
-            if role != "arm":
-                names.add(entity)
-    return names
-
-
-class Conductor:
     def __init__(self, graph: TaskGraph, robot: Any, keyframes: TabletopKeyframes, log: TrialLog,
                  steps_per_tick: int, compiled_keyframes: dict[str, np.ndarray] | None = None,
                  config: ConductorConfig = ConductorConfig(), metrics: Metrics | None = None,
@@ -186,7 +115,7 @@ class Conductor:
         """Run the edge's actions under its monitors; the first firing, or None. `stop(action)`, asked after
         each action, ends the edge early (an outside watch fired)."""
         self.log.status(f"{edge.kind} {edge.id}")
-        objs = _objects_of(edge)
+        objs = objects_of(edge)
         monitors = list(edge.monitors) if with_monitors else []
         observers = getattr(self.robot, "step_observers", None)
         per_step = [m for m in monitors if observers is not None and proprioceptive(m.check)]
@@ -262,45 +191,6 @@ class Conductor:
     def robot_steps(self) -> int:
         return int(getattr(self.robot, "control_steps", 0))
 
-    def _backtrack(self, failed: Edge, firing: Firing) -> str:
-        """The latest nominal node before the failed edge whose constraints hold now (the start always does)."""
-        arm = firing_arm(failed, firing)
-        chain = self._nominal_path()
-        upto = chain[: chain.index(failed.source) + 1]
-        names = {e for n in upto for c in self.graph.node(n).constraints for e, role, _ in c.refs() if role != "arm"}
-        if arm is not None:
-            self.wait_still(arm, names | _objects_of(failed), failed)
-        f = self._read(names)
-        for n in reversed(upto):
-            if all(not c.evaluate(f) > 0.0 for c in self.graph.node(n).constraints):
-                self.log.event(self.robot.sim_time, "backtrack", f"{firing.failure_mode} on {failed.id}: back to {n!r}")
-                self.log.transition(failed.id, f"backtrack:{n}")
-                return n
-        return self.graph.start
-
-    def _nominal_path(self) -> list[str]:
-        out, node = [self.graph.start], self.graph.start
-        while node != self.graph.goal:
-            node = next_edge(self.graph, node, self.ctg).target
-            out.append(node)
-        return out
-
-    def _recheck(self, edge: Edge) -> Firing | None:
-        """After a recovery merged: the failed edge's monitors that need no edge-start reference, read once, but
-        not the drop checks (touch): `LossWatch` judged those during the recovery with Eq. 12's window, as the
-        nominal edge's watch does. Read once more here, a hand that lost touch in the last control steps of a
-        two-arm carry (the tray set on the table slid out of the left pads) fired with no window, and the same
-        recovery ran again and again (coffee-tray seed 13: four times, 1780 steps against rekep's 1240)."""
-        bound = [m.model_copy(update={"window": 1}) for m in edge.monitors
-                 if m.check.bound and m.check.kind != "touching"]
-        if not bound:
-            return None
-        firing = MonitorBank(bound).step(self._read(_objects_of(edge)))
-        if firing is not None:
-            self.metrics.fired_at = self.robot_steps()
-            self._fired(edge, firing)
-        return firing
-
     def _fired(self, edge: Edge, firing: Firing) -> None:
         t = self.robot.sim_time
         self.metrics.firings.append(f"{edge.id}:{firing.failure_mode}")
@@ -311,129 +201,6 @@ class Conductor:
         if branch and firing.recovery is not None:
             self.log.transition(edge.id, firing.recovery)
 
-    def _run_recovery(self, failed: Edge, firing: Firing) -> str | None:
-        """The recovery chain from the failure context to its merge node; returns the merge node, or None when
-        the recovery itself was disturbed (a held object dropped, a grasp closed on nothing): the caller runs
-        the same recovery again, since the failure context and its predicted state are the same."""
-        from kintsugi.methods.agentchord.recovery_watch import held_in_failure, named
-
-        g = self.graph
-        edge = g.edge(firing.recovery)
-        self._settle(failed, edge, firing)
-        # Watched for a loss: what the failure context held and what the recovery has taken hold of so far. Not
-        # whatever else the pads touch: a hand closing on a capsule that stands in the tray pinches the tray's
-        # wall too, and lifting the capsule out of that pinch is no drop (coffee-tray seed 70 ran its recovery
-        # again for the tray's "loss" ten times, and gave up).
-        held = held_in_failure(failed)
-        while True:
-            held |= named(edge)
-            again = self._run_watched(edge, held)
-            if again is not None:
-                self.log.event(self.robot.sim_time, "recovery disturbed", f"{edge.id}: {again}; run it again")
-                return None  # the run again settles first (settling here too waited out three more reads)
-            if g.node(edge.target).kind == "nominal":
-                return edge.target
-            arm, objs = firing_arm(failed, firing), _guard_objects(g, edge.target)
-            if arm is not None and objs and _moves(edge):  # the edge may have nudged what the guards read (a hand
-                self.wait_still(arm, objs, edge)  # rising past a bottle leaning on the held cup): read it at rest
-            nxt, matched = guarded_next_edge(g, edge.target, self._read(objs), self.ctg)
-            if nxt is None:  # cannot happen on an Eq. 8-filtered graph: every recovery node merges
-                raise ConductorError(f"recovery node {edge.target!r} has no way back into the graph")
-            if not matched:
-                self.log.event(self.robot.sim_time, "branch", f"no guard out of {edge.target!r} holds; "
-                               f"taking the cheapest, {nxt.id!r}")
-            edge = nxt
-
-    def _run_watched(self, edge: Edge, held: set[str]) -> str | None:
-        """One recovery edge under `LossWatch` (a loss of what the recovery holds, `held`), then its target's
-        constraints; what went wrong, or None."""
-        from kintsugi.methods.agentchord.recovery_watch import LossWatch, unmet, watched
-
-        watch = LossWatch(self.robot, held)
-        observers = getattr(self.robot, "step_observers", None)
-        if observers is not None:
-            observers.append(watch)
-        try:
-            self.run_edge(edge, with_monitors=False, stop=lambda a: watch.check_grasp(a) is not None)
-        finally:
-            if observers is not None:
-                observers.remove(watch)
-        if watch.lost is not None:
-            self.metrics.fired_at = watch.at
-            return watch.lost
-        node = self.graph.node(edge.target)
-        bad = unmet(node, self._read(watched(node))) if node.constraints else None
-        if bad is not None:
-            self.metrics.fired_at = self.robot_steps()
-            return f"{edge.target!r}: {bad} violated"
-        return None
-
-    def _settle(self, failed: Edge, recovery: Edge, firing: Firing) -> None:
-        """Open the failing arm's gripper and keep it open until the objects its monitors watch have come to
-        rest (two reads within SETTLE_M), so the recovery's perception-conditioned actions (a re-grasp) aim
-        at where a dropped object lies, not where it was falling. Only the arm whose monitor fired: the other
-        may still hold its own object (opening it dropped a fork while the spoon was recovered)."""
-        arm = firing_arm(failed, firing)
-        if arm is not None:
-            self.wait_still(arm, _objects_of(failed) | self.goal_objects, recovery)
-
-    def wait_still(self, arm: str, objs: set[str], edge: Edge) -> bool:
-        """True once the objects are at rest; False if they still move after SETTLE_TRIES reads."""
-        if not objs:
-            return True
-        prev, still, set_downs = None, 0, 0
-        for _ in range(SETTLE_TRIES):
-            self._execute(edge, "open_gripper", {"arm": arm})
-            now = self.robot.features(objs)
-            self.tops.observe(now)
-            self.heads.observe(now)
-            seen = [now[k] for k in sorted(objs) if now[k].centroid is not None]
-            pts = np.array([f.centroid for f in seen], dtype=float).reshape(-1, 3)  # none seen: (0, 3)
-            axes = [None if f.axis is None else np.asarray(f.axis, dtype=float) for f in seen]
-            moved = prev is None or pts.shape != prev[0].shape or not np.all(np.linalg.norm(pts - prev[0], axis=1) < SETTLE_M)
-            if not moved:
-                for a, b in zip(axes, prev[1]):
-                    if (a is None) != (b is None):
-                        moved = True
-                    elif a is not None:
-                        cos = abs(float(a @ b)) / max(float(np.linalg.norm(a) * np.linalg.norm(b)), 1e-12)
-                        moved = moved or np.degrees(np.arccos(min(1.0, cos))) > SETTLE_DEG
-            still = 0 if moved else still + 1
-            if still >= SETTLE_READS:
-                if set_downs < MAX_SET_DOWNS and self._set_down_caught(arm, now, edge):
-                    set_downs, prev, still = set_downs + 1, None, 0
-                    continue
-                if hasattr(self.robot, "control_steps"):
-                    self._rested = (self.robot_steps(), frozenset(objs))
-                return True
-            prev = (pts, axes)
-        return False
-
-    def _set_down_caught(self, arm: str, seen: dict, edge: Edge) -> bool:
-        """An object that came to rest in the open hand (both finger pads touch it, and it hangs clear of the
-        table) is closed on, turned top up when its top is known (its pose in the hand read again first), and set
-        down at the nearest spot clear of every other object; True if one was. A bottle dropped while the hand
-        was turned over to pour fell across the open fingers and stayed there; the re-grasp's rise to its pose
-        above carried it along and flung it out of reach (pour-dual seeds 86 and 88). Set down straight below,
-        it lay where the other hand was lowering the cup."""
-        touching = self.robot.arm_state(arm).touching
-        caught = [k for k in sorted(seen) if touching.get(k) == 2 and seen[k].centroid is not None
-                  and seen[k].extremes and seen[k].extremes["bottom"][2] > CAUGHT_CLEAR_M]
-        if not caught:
-            return False
-        obj = caught[0]
-        self.log.event(self.robot.sim_time, "caught", f"{obj} rests in the open {arm} hand: set it down")
-        self._execute(edge, "close_gripper", {"arm": arm})
-        self.tops.regrip(arm, obj, self.robot.features({obj}), self.robot.arm_state(arm))
-        turn = self.synthesis.upright_call({"action": "rotate_eef", "arm": arm, "angle_deg": 0.0, "axis": "closing"})
-        if turn["action"] == "move_by_offset":  # its top is known: stand it on its base
-            self._execute(edge, "move_by_offset", {k: v for k, v in turn.items() if k != "action"})
-        others = [f for k, f in self.robot.features().items() if k != obj and f.centroid is not None]
-        for x, y in set_down_spots(seen[obj], others, self.robot.bases[arm])[:SET_DOWN_TRIES]:
-            if self._execute(edge, "place", {"arm": arm, "x": round(x, 4), "y": round(y, 4)}, unplanned_ok=True):
-                return True
-        self._execute(edge, "open_gripper", {"arm": arm})
-        return True
 
     def _execute(self, edge: Edge, name: str, args: dict, unplanned_ok: bool = False) -> bool:
         """Run one atomic action; False when it could not be planned and `unplanned_ok` (nothing moved), else
@@ -517,20 +284,3 @@ class Conductor:
             self.log.event(self.robot.sim_time, "goal check", f"goal {goal.id!r}: violated {', '.join(bad) or '-'}; "
                            f"undecided {', '.join(unknown) or '-'}")
         return not bad
-
-
-def set_down_spots(obj: ObjectFeatures, others: list[ObjectFeatures], base: np.ndarray) -> list[tuple[float, float]]:
-    """Table spots (x, y) to set a caught object down at, nearest first (ties: nearer the arm's base, easier
-    to reach): below where it hangs, or rings around that 5 cm apart, clear of every other object's extent."""
-    c = np.asarray(obj.centroid, dtype=float)[:2]
-    half = max(obj.extent or (0.0,)) / 2.0
-    spots = [c] + [c + r * np.array([np.cos(a), np.sin(a)]) for r in np.arange(0.05, 0.31, 0.05)
-                   for a in np.linspace(0.0, 2.0 * np.pi, 16, endpoint=False)]
-    spots.sort(key=lambda p: (round(float(np.linalg.norm(p - c)), 3), float(np.linalg.norm(p - base[:2]))))
-
-    def clear(p: np.ndarray) -> bool:
-        return all(np.linalg.norm(p - np.asarray(o.centroid, dtype=float)[:2])
-                   >= half + max(o.extent or (0.0,)) / 2.0 + SET_DOWN_MARGIN_M for o in others)
-
-    return [(float(p[0]), float(p[1])) for p in spots if clear(p)]
-

@@ -20,7 +20,8 @@ from kintsugi.core.record import Figures
 from kintsugi.core.errors import ConfigError, KintsugiError
 from kintsugi.core.registry import METHODS
 from kintsugi.methods.agentchord.compile import compile_graph
-from kintsugi.methods.agentchord.conductor import Conductor, ConductorConfig
+from kintsugi.methods.agentchord.conducting import ConductorConfig
+from kintsugi.methods.agentchord.conductor import Conductor
 from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes  # noqa: F401
 from kintsugi.core.log import TrialLog
 

@@ -21,7 +21,8 @@ from typing import Any, Literal
 from kintsugi.core.errors import ConfigError
 from kintsugi.core.registry import METHODS
 from kintsugi.methods.agentchord.compile import compile_graph, persistent_monitors
-from kintsugi.methods.agentchord.conductor import Conductor, ConductorConfig, Metrics, firing_arm
+from kintsugi.methods.agentchord.conducting import ConductorConfig, Metrics, firing_arm
+from kintsugi.methods.agentchord.conductor import Conductor
 from kintsugi.methods.agentchord.keyframes import TabletopKeyframes
 from kintsugi.methods.agentchord.method import LatencySettings, RunFigures
 from kintsugi.methods.agentchord.observe import seen_arms, seen_objects

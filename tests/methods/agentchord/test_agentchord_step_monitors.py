@@ -7,7 +7,8 @@ from __future__ import annotations
 import kintsugi  # noqa: F401 - sets MUJOCO_GL before mujoco is imported
 import pytest
 
-from kintsugi.methods.agentchord.conductor import Conductor, proprioceptive
+from kintsugi.methods.agentchord.conducting import proprioceptive
+from kintsugi.methods.agentchord.conductor import Conductor
 from kintsugi.taskgraph.constraints import Detached, NotGrasped, Touching
 from kintsugi.taskgraph.model import TaskGraph
 from kintsugi.worlds.tabletop.config import TabletopConfig

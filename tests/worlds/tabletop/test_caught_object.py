@@ -9,7 +9,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from kintsugi.methods.agentchord.conductor import SET_DOWN_MARGIN_M, set_down_spots
+from kintsugi.methods.agentchord.settling import SET_DOWN_MARGIN_M, set_down_spots
 from kintsugi.methods.agentchord.method import metrics_of
 from kintsugi.perception.features import ObjectFeatures
 from kintsugi.core.record import TrialSpec

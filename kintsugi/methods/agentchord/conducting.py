@@ -1,0 +1,75 @@
+"""What the conductor is configured with and counts, and what an edge's monitors read.
+
+`ConductorConfig` (budgets, branch or backtrack), `Metrics` (episode steps, recoveries, recovery latency),
+`ConductorError`; and the reads of a monitor's checks: whether a check is proprioceptive (sampled every
+control step), which arm a firing concerns, which objects an edge or a node's guards watch.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Literal
+
+from kintsugi.core.config import StrictModel
+from kintsugi.core.errors import KintsugiError
+from kintsugi.taskgraph.model import Edge, TaskGraph
+from kintsugi.taskgraph.monitor import Firing
+
+
+class ConductorError(KintsugiError):
+    """The conductor cannot go on (action budget spent, a recovery node with no way back)."""
+
+
+class ConductorConfig(StrictModel):
+    max_actions: int = 200
+    """Atomic actions per episode before the conductor gives up (a recovery loop never ends a trial hanging)."""
+    max_recoveries: int = 10
+    """Recoveries (or backtracks) per episode before the conductor gives up."""
+    on_failure: Literal["branch", "backtrack"] = "branch"
+    """branch: the pre-compiled forward recovery (AgentChord); backtrack: back to the latest nominal node whose
+    sub-goal still holds and re-run the nominal edges from there (AC-BT, ReKep-style)."""
+
+
+@dataclass
+class Metrics:
+    episode_steps: int = 0
+    """Control steps spent in atomic actions (the paper's episode steps)."""
+    actions: int = 0
+    recoveries: int = 0
+    recovery_latency_steps: list[int] = field(default_factory=list)
+    """Per recovery: control steps from the monitor's firing to the recovery's first command."""
+    firings: list[str] = field(default_factory=list)
+    keyframe_solves: int = 0
+    fired_at: int | None = None
+    """Control step of the latest firing whose recovery has not issued its first command yet."""
+
+
+def proprioceptive(check: Any) -> bool:
+    """A check that reads only the arms' own sensors (no perceived object geometry): per-control-step."""
+    return all(role == "arm" or feature is None for _, role, feature in check.refs())
+
+
+def moves_an_arm(edge: Edge) -> bool:
+    """The edge moves an arm (anything but opening a hand, which the settle before it has just done while the
+    objects came to rest)."""
+    return any(a.name != "open_gripper" for a in edge.actions)
+
+
+def guard_objects(graph: TaskGraph, node: str) -> set[str]:
+    return {e for x in graph.out_edges(node) for c in x.guard for e, role, _ in c.refs() if role != "arm"}
+
+
+def firing_arm(edge: Edge, firing: Firing) -> str | None:
+    """The arm the fired monitor watches (the first arm any of the edge's monitors reads when it names none)."""
+    mine = [m for m in edge.monitors if m.id == firing.monitor] or list(edge.monitors)
+    return next((e for m in mine for e, role, _ in m.check.refs() if role == "arm"), None)
+
+
+def objects_of(edge: Edge) -> set[str]:
+    """The objects the edge's monitors read."""
+    names: set[str] = set()
+    for m in edge.monitors:
+        for entity, role, _ in m.check.refs():
+            if role != "arm":
+                names.add(entity)
+    return names
