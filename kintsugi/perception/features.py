@@ -21,7 +21,9 @@ from kintsugi.core.config import StrictModel
 from kintsugi.core.errors import ConfigError
 from kintsugi.perception.cloud import CameraModel, View, body_geom_ids, object_cloud, object_clouds
 from kintsugi.perception.render import SegDepthRenderer, render_view
-from kintsugi.perception.primitives import Fit, FitSettings, Primitive, fit_primitive, surface_samples
+from kintsugi.perception.fitting import fit_primitive
+from kintsugi.perception.primitives import Fit, Primitive, surface_samples
+from kintsugi.perception.rigid_fit import FitSettings
 
 __all__ = [
     "CameraModel",
