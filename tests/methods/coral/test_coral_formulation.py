@@ -21,6 +21,7 @@ from tests.coral_scenes import BOX, CLUTTER, CUBES, DISC, GREEN, PUSH, WALL, req
 K, T = 16, 5
 
 
+@pytest.mark.slow
 def test_push_and_press_from_the_instruction_and_the_wall() -> None:
     reply = compose(PUSH)
     assert [s.name for s in reply.stages] == ["approach", "push", "press"]
@@ -148,6 +149,7 @@ def test_the_press_lasts_as_long_as_the_instruction_says() -> None:
     assert compose(untimed).knobs["hold_press_s"] == 2.0  # the library's default when the text names none
 
 
+@pytest.mark.slow
 def test_push_over_the_edge_then_pick_from_below() -> None:
     board = ObjectState(name="board", label="cutting board", size_m=(0.34, 0.16, 0.02), pos_m=(0.05, 0.01, 0.01),
                         yaw_deg=4.0, upright_deg=0.0)
@@ -166,6 +168,7 @@ def test_push_over_the_edge_then_pick_from_below() -> None:
     assert [s.name for s in again.stages] == [s.name for s in reply.stages] and "tray_hi" in again.source
 
 
+@pytest.mark.slow
 def test_the_pivot_counts_as_done_only_with_the_box_down_on_the_table() -> None:
     """A box turned upright but balanced on the curb's top is not done (the false successes of flip-wall):
     the pivot's own check wants it turned, still and down on the table the curb stands on."""
@@ -205,6 +208,7 @@ def test_a_pivot_that_did_not_come_to_rest_turns_further_and_is_not_a_dropped_gr
     assert reply.knobs["tip_deg"] == plan.knobs["tip_deg"]
 
 
+@pytest.mark.slow
 def test_a_place_is_done_only_with_the_box_left_on_the_disc_and_the_cubes_where_they_were() -> None:
     reply = compose(CLUTTER)
     checked, program, notes = check_formulation(reply, CLUTTER, K, T)
@@ -225,6 +229,7 @@ def test_a_place_is_done_only_with_the_box_left_on_the_disc_and_the_cubes_where_
     assert descend.noise_scale < 1.0 and program.has("descend_cost_seed_z")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("body", ["return start_tcp", "return 1.0 / 0.0", "return undefined_name"])
 def test_a_broken_seed_function_is_refused_before_the_loop(body: str) -> None:
     """`<cost>_seed_<axis>` functions are probed with the other stage functions: a vector, a division by zero or an

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import math
 
+import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -84,6 +85,7 @@ def _text(raw: object, as_text: bool) -> object:
         return raw
 
 
+@pytest.mark.slow
 @settings(max_examples=700, derandomize=True, deadline=None)
 @given(data=st.data(), as_text=st.booleans())
 def test_hostile_formulations_are_a_clear_error_or_clamped(data: st.DataObject, as_text: bool) -> None:
@@ -129,6 +131,7 @@ def _mutate_adaptation(data: st.DataObject) -> object:
     return reply
 
 
+@pytest.mark.slow
 @settings(max_examples=600, derandomize=True, deadline=None)
 @given(data=st.data(), as_text=st.booleans())
 def test_hostile_adaptations_are_a_clear_error_or_clamped(data: st.DataObject, as_text: bool) -> None:

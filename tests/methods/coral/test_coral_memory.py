@@ -30,6 +30,7 @@ def _coral(tmp_path, variant: str, seed: int):  # noqa: ANN001, ANN202
     return method, req
 
 
+@pytest.mark.slow
 def test_a_success_is_recalled_by_the_same_method_only(tmp_path) -> None:  # noqa: ANN001
     first, req1 = _coral(tmp_path, "coral", 0)
     plan = compose(req1)

@@ -71,6 +71,7 @@ def _writer(path: str, worker: int) -> None:
             mem.add(episode("pick-box", f"pick box {worker}-{i}", BOX))
 
 
+@pytest.mark.slow
 def test_parallel_writers_lose_nothing(tmp_path: Path) -> None:
     path = tmp_path / "shared.sqlite"
     EpisodeMemory(path).close()

@@ -87,6 +87,7 @@ _REPLY = st.one_of(
 )
 
 
+@pytest.mark.slow
 @settings(max_examples=1200, derandomize=True, deadline=None)
 @given(raw=_REPLY, as_text=st.booleans())
 def test_hostile_replies_are_a_clear_error_or_bounded(raw: object, as_text: bool) -> None:
