@@ -11,9 +11,10 @@ Task-free: actions, objects and features are named by a `Vocabulary` the task su
 
 from kintsugi.taskgraph.augment import RecoveryProposal, augment, parse_proposals
 from kintsugi.taskgraph.base import GraphError
-from kintsugi.taskgraph.constraints import TEMPLATES, Constraint, Point
+from kintsugi.taskgraph.constraints import TEMPLATES, Constraint
 from kintsugi.taskgraph.features import ArmState, Features, ObjectState
 from kintsugi.taskgraph.forward import Branch, FilterResult, cost_to_go, forward_filter, next_edge
+from kintsugi.taskgraph.geometry import Point
 from kintsugi.taskgraph.model import ActionCall, Edge, Monitor, Node, TaskGraph
 from kintsugi.taskgraph.monitor import Firing, MonitorBank
 from kintsugi.taskgraph.render import to_dot, write_graph_picture

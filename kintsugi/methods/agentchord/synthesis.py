@@ -161,7 +161,7 @@ class EdgeSynthesis:
         limit. None (the default grasp) when the edge stands nothing up, the top is unknown, or after a miss."""
         from kintsugi.methods.agentchord.domain import UPEND_LIFT_M
         from kintsugi.methods.agentchord.tops import upright_hand
-        from kintsugi.taskgraph.constraints import wrap_deg
+        from kintsugi.taskgraph.geometry import wrap_deg
         from kintsugi.worlds.tabletop.planning import down_rotation
 
         arm, obj = call["arm"], call["obj"]
@@ -212,7 +212,7 @@ class EdgeSynthesis:
         that brings the held object's tracked head (`Heads`) to the sub-goal's yaw. The compiled angle was
         relative to the first observation: wrong for an object re-grasped after it fell mid-turn."""
         from kintsugi.methods.agentchord.tops import hand_rotation, held_by
-        from kintsugi.taskgraph.constraints import wrap_deg
+        from kintsugi.taskgraph.geometry import wrap_deg
 
         state = self.robot.arm_state(call["arm"])
         goal = next(((c.object, c.yaw_deg) for c in self.graph.node(edge.target).constraints
@@ -234,7 +234,7 @@ class EdgeSynthesis:
         when the arm reaches that grasp (IK checked before moving)."""
         from scipy.spatial.transform import Rotation
 
-        from kintsugi.taskgraph.constraints import wrap_deg
+        from kintsugi.taskgraph.geometry import wrap_deg
 
         arm, obj = call["arm"], call["obj"]
         misses = self.missed.get((arm, obj), 0)

@@ -16,7 +16,7 @@ from typing import Any, Mapping
 import numpy as np
 from scipy.spatial.transform import Rotation
 
-from kintsugi.taskgraph.constraints import head_yaw_deg
+from kintsugi.taskgraph.geometry import head_yaw_deg
 
 UP = np.array([0.0, 0.0, 1.0])
 CAP_ALONG_M = 0.02
