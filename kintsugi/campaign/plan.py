@@ -92,11 +92,11 @@ def validate(cfg: CampaignConfig) -> None:
     from kintsugi.campaign.bootstrap import bootstrap
     from kintsugi.core.registry import METHODS, TASKS
     from kintsugi.core.runner import split_overrides
-    from kintsugi.reasoning import make_reasoner
+    from kintsugi.reasoning import make_reasoner, reasoner_settings
 
     bootstrap(cfg.plugins, cfg.task)
     task = TASKS.get(cfg.task).factory()
-    task_overrides, method_overrides = split_overrides(cfg.overrides)
+    task_overrides, method_overrides, reasoner_overrides = split_overrides(cfg.overrides)
     for name in cfg.methods:
         entry = METHODS.get(name)
         if task.method_tag not in entry.tags:
@@ -107,7 +107,7 @@ def validate(cfg: CampaignConfig) -> None:
     for name in cfg.variants:
         task.check_variant(name, config)
     _known(cfg.conditions, task.conditions, f"condition for task {cfg.task!r}")
-    make_reasoner(cfg.reasoner)
+    make_reasoner(reasoner_settings(cfg.reasoner, reasoner_overrides))
 
 
 def task_defaults(task: str, plugins: list[str] | tuple[str, ...] = ()) -> tuple[str, str, tuple[str, ...]]:

@@ -11,7 +11,11 @@ from kintsugi.core.config import StrictModel
 
 
 class ReasonerSettings(StrictModel):
-    """Which reasoner backend a method uses, and how to reach it."""
+    """Which reasoner backend a method uses, and how to reach it.
+
+    The fields every backend may read are here; `options` holds the backend's own settings,
+    validated by the settings class it registered with (`--set reasoner.options.<key>=value`,
+    e.g. the scripted backend's `replies` file)."""
 
     backend: str = "embedded"
     model: str | None = None
@@ -22,6 +26,8 @@ class ReasonerSettings(StrictModel):
     structured_output: Literal["auto", "strict", "text"] = "auto"
     """strict: server-enforced JSON schema / tool calls; text: JSON asked for in the prompt; auto: strict until
     the server refuses or ignores it, then text."""
+    options: dict[str, Any] = Field(default_factory=dict)
+    """The backend's own settings (checked by its settings class when the reasoner is built)."""
 
 
 class TrialSpec(StrictModel):

@@ -23,15 +23,20 @@ Echo = Callable[[str], None]
 Attach = Callable[[Any, TrialLog], None]
 
 
-def split_overrides(overrides: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any]]:
-    """`method.<key>` overrides go to the method's config; every other key to the task's."""
+def split_overrides(overrides: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
+    """(task, method, reasoner) overrides: `method.<key>` go to the method's config, `reasoner.<key>` to the
+    reasoner settings (`reasoning.reasoner_settings`), every other key to the task's."""
     method = {k.split(".", 1)[1]: v for k, v in overrides.items() if k.startswith("method.")}
-    task = {k: v for k, v in overrides.items() if not k.startswith("method.")}
-    return task, method
+    reasoner = {k.split(".", 1)[1]: v for k, v in overrides.items() if k.startswith("reasoner.")}
+    task = {k: v for k, v in overrides.items() if not k.startswith(("method.", "reasoner."))}
+    return task, method, reasoner
 
 
-def resolve(spec: TrialSpec) -> tuple[Any, Any, Any, Any]:
-    """(task, method entry, task config, method config) for a spec; ConfigError names what is wrong."""
+def resolve(spec: TrialSpec) -> tuple[Any, Any, Any, Any, Any]:
+    """(task, method entry, task config, method config, reasoner settings) for a spec; ConfigError names
+    what is wrong."""
+    from kintsugi.reasoning import reasoner_settings
+
     load_builtins()
     task = TASKS.get(spec.task).factory()
     entry = METHODS.get(spec.method)
@@ -39,10 +44,10 @@ def resolve(spec: TrialSpec) -> tuple[Any, Any, Any, Any]:
         fits = [e.name for e in METHODS if task.method_tag in e.tags]
         raise ConfigError(f"method {spec.method!r} does not run {task.name} (it drives another robot); "
                           f"methods that do: {', '.join(fits) or '(none)'}")
-    task_overrides, method_overrides = split_overrides(spec.overrides)
+    task_overrides, method_overrides, reasoner_overrides = split_overrides(spec.overrides)
     cfg = task.config(task_overrides)
     task.check_variant(spec.variant, cfg)
-    return task, entry, cfg, entry.configure(method_overrides)
+    return task, entry, cfg, entry.configure(method_overrides), reasoner_settings(spec.reasoner, reasoner_overrides)
 
 
 def run_trial(spec: TrialSpec, echo: Echo | None = None, attach: Attach | None = None) -> TrialRecord:
@@ -66,10 +71,10 @@ def failed_record(spec: TrialSpec, error: str) -> TrialRecord:
 
 
 def _run(spec: TrialSpec, echo: Echo | None, attach: Attach | None) -> TrialRecord:
-    task, entry, cfg, method_cfg = resolve(spec)
+    task, entry, cfg, method_cfg, reasoner = resolve(spec)
     episode = task.episode(cfg, spec.variant, spec.condition, spec.seed, video=bool(spec.video))
     try:
-        method = entry.factory(episode.context(entry.tags, spec.reasoner, spec.seed), method_cfg)
+        method = entry.factory(episode.context(entry.tags, reasoner, spec.seed), method_cfg)
         video = episode.video
         log = TrialLog(echo=echo, on_status=video.status if video is not None else None)
         if attach is not None:

@@ -11,7 +11,7 @@ import math
 from collections.abc import Sequence
 
 from kintsugi.perception.segment import PerceptionConfig, SceneMeasurement
-from kintsugi.methods.recovery.types import Axis, CheckResult, Pose
+from kintsugi.perception.types import Axis, CheckResult, Pose
 
 FIT_SUCCESS = "success"
 FIT_GY_TOO_SMALL = "p_gy was too small."

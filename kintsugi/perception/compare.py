@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 
 from kintsugi.perception.segment import PerceptionConfig, board_surface_v, measure, peg_mask
-from kintsugi.methods.recovery.types import CameraCalibration, CheckResult
+from kintsugi.perception.types import CameraCalibration, CheckResult
 
 
 def surface_z_mm(image_rgb: np.ndarray, calib: CameraCalibration, cfg: PerceptionConfig) -> float:

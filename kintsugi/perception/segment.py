@@ -8,7 +8,7 @@ Millimetres come from ``CameraCalibration.to_plane``: y grows to the right
 (u), z grows upward (against v).
 
 The colour thresholds and check tolerances (`PerceptionConfig`) are defined in
-`kintsugi.methods.recovery.types`, because reasoners are told them too.
+`kintsugi.perception.types`, with the other observation types.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from pydantic import Field
 
 from kintsugi.core.config import StrictModel
 from kintsugi.perception.tilt import TiltMethod, estimate_tilt
-from kintsugi.methods.recovery.types import CameraCalibration, HsvRange, PerceptionConfig  # noqa: F401 - re-exported
+from kintsugi.perception.types import CameraCalibration, HsvRange, PerceptionConfig  # noqa: F401 - re-exported
 
 
 class Blob(StrictModel):

@@ -13,7 +13,7 @@ import cv2
 import numpy as np
 
 from kintsugi.core.config import StrictModel
-from kintsugi.methods.recovery.types import CameraCalibration
+from kintsugi.perception.types import CameraCalibration
 
 SS = 4  # supersampling factor of the rasteriser
 

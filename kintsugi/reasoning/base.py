@@ -1,8 +1,9 @@
 """The reasoner protocol and the transcript wrapper that records every call.
 
-A method talks to any backend through `Reasoner`; wrapping it in
-`RecordingReasoner` gives the trial a transcript (role, request, reply,
-latency, tokens, attempts, error) so a user can read why the robot moved.
+A backend answers any registered role (`kintsugi.reasoning.roles`) through `Reasoner.answer`;
+methods ask through `roles.ask`. Wrapping a backend in `RecordingReasoner` gives the trial a
+transcript (role, request, reply, latency, tokens, attempts, error) so a user can read why the
+robot moved.
 """
 
 from __future__ import annotations
@@ -10,21 +11,18 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
-from typing import Any, Callable, Protocol, TypeVar, runtime_checkable
+from typing import TYPE_CHECKING, Any, Callable, Literal, Protocol, TypeVar, runtime_checkable
 
-from pydantic import BaseModel
+from pydantic import BaseModel, Field
 
+from kintsugi.core.config import StrictModel
 from kintsugi.core.errors import ReasoningError
-from kintsugi.methods.recovery.types import (
-    AnalyzeReply,
-    AnalyzeRequest,
-    CallRecord,
-    JudgeReply,
-    JudgeRequest,
-    PlanReply,
-    PlanRequest,
-    Role,
-)
+
+if TYPE_CHECKING:
+    from kintsugi.reasoning.roles import Role
+
+Check = Callable[[Any], Any]
+"""A reply -> the reply to use (possibly corrected); raises ReasoningError (e.g. BadReply) to reject it."""
 
 
 @dataclass(frozen=True)
@@ -44,21 +42,37 @@ class CallStats:
     output_note: str | None = None
 
 
+class CallRecord(StrictModel):
+    """One reasoner call as kept in the trial transcript."""
+
+    role: str = Field(min_length=1, max_length=40, description="the role's registered name (judge, composer, ...)")
+    backend: str
+    request: dict
+    reply: dict | None
+    error: str | None = None
+    latency_s: float = 0.0
+    tokens_in: int = 0
+    tokens_out: int = 0
+    attempts: int = 1
+    output_mode: Literal["strict", "text"] | None = None
+    """How an endpoint enforced the reply format (None for backends without one, e.g. embedded)."""
+    output_note: str | None = None
+    """Set on the call where the backend fell back from strict to text output, with the reason."""
+
+
 @runtime_checkable
 class Reasoner(Protocol):
-    """One object answering the three roles of the recovery loop.
+    """A backend: answers any role's request with a reply of the role's reply type.
 
-    Implementations raise `ReasoningError` (or a subclass) when they cannot give a
-    valid reply; they may expose `last_stats: CallStats | None` for accounting.
+    `check` (the role's and the caller's checks, combined) must run on every reply before it is
+    returned; a backend that can ask again (a model endpoint) sends its complaint back for one
+    repair. Implementations raise `ReasoningError` (or a subclass) when they cannot give a valid
+    reply; they may expose `last_stats: CallStats | None` for accounting.
     """
 
     name: str
 
-    def judge(self, request: JudgeRequest) -> JudgeReply: ...
-
-    def analyze(self, request: AnalyzeRequest) -> AnalyzeReply: ...
-
-    def plan(self, request: PlanRequest) -> PlanReply: ...
+    def answer(self, role: "Role", request: BaseModel, check: Check | None = None) -> BaseModel: ...
 
 
 def describe_bytes(data: bytes) -> str:
@@ -90,11 +104,11 @@ R = TypeVar("R", bound=BaseModel)
 
 
 class RecordingReasoner:
-    """Wraps a reasoner; appends one `CallRecord` per call to `records`.
+    """Wraps a backend; appends one `CallRecord` per call to `records`.
 
-    A `ReasoningError` from the inner reasoner is recorded with its message and
-    re-raised, so failed calls appear in the transcript too. Pass an existing
-    list as `records` to share one transcript between several wrappers.
+    A `ReasoningError` from the backend is recorded with its message and re-raised, so failed
+    calls appear in the transcript too. Pass an existing list as `records` to share one
+    transcript between several wrappers.
     """
 
     def __init__(self, inner: Reasoner, records: list[CallRecord] | None = None) -> None:
@@ -106,14 +120,8 @@ class RecordingReasoner:
     def last_stats(self) -> CallStats | None:
         return getattr(self.inner, "last_stats", None)
 
-    def judge(self, request: JudgeRequest) -> JudgeReply:
-        return self._call("judge", self.inner.judge, request)
-
-    def analyze(self, request: AnalyzeRequest) -> AnalyzeReply:
-        return self._call("analyze", self.inner.analyze, request)
-
-    def plan(self, request: PlanRequest) -> PlanReply:
-        return self._call("plan", self.inner.plan, request)
+    def answer(self, role: "Role", request: BaseModel, check: Check | None = None) -> BaseModel:
+        return self.record(role.name, lambda req: self.inner.answer(role, req, check), request)
 
     @property
     def total_latency_s(self) -> float:
@@ -123,11 +131,8 @@ class RecordingReasoner:
     def errors(self) -> int:
         return sum(1 for r in self.records if r.error is not None)
 
-    def _call(self, role: Role, method: Callable[[Any], R], request: BaseModel) -> R:
-        return self.record(role, method, request)
-
     def record(self, role: str, method: Callable[[Any], R], request: BaseModel) -> R:
-        """Call `method(request)` and append its record under `role` (any role, see reasoning/roles.py)."""
+        """Call `method(request)` and append its record under `role`."""
         if hasattr(self.inner, "last_stats"):
             self.inner.last_stats = None  # type: ignore[attr-defined]  # never report a stale call
         start = time.perf_counter()

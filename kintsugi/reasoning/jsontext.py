@@ -1,4 +1,4 @@
-"""One JSON object out of a model's free text.
+"""One JSON object out of a model's free text, and pydantic errors as text a model can act on.
 
 Servers without strict structured output leave the format to the model, and
 small models wrap JSON in code fences, add prose, leave trailing commas or
@@ -13,6 +13,8 @@ from __future__ import annotations
 import json
 import re
 from typing import Any
+
+from pydantic import ValidationError
 
 from kintsugi.core.errors import ReasoningError
 
@@ -124,3 +126,15 @@ def _single_to_double(token: str) -> str:
     body = re.sub(r"\\(.)|\"", lambda m: ("'" if m.group(1) == "'" else m.group()) if m.group(1) else '\\"', body,
                   flags=re.S)
     return f'"{body}"'
+
+
+def describe_validation_error(exc: ValidationError, limit: int = 8) -> str:
+    """Compact 'where: what' lines from a pydantic error, without echoing huge inputs."""
+    lines = []
+    for err in exc.errors(include_url=False, include_input=False)[:limit]:
+        where = ".".join(str(p) for p in err["loc"]) or "(top level)"
+        lines.append(f"{where}: {err['msg']}")
+    more = exc.error_count() - limit
+    if more > 0:
+        lines.append(f"... and {more} more problems")
+    return "; ".join(lines)

@@ -1,12 +1,14 @@
-"""Reasoner backed by any OpenAI-compatible chat-completions endpoint.
+"""Reasoner backed by any OpenAI-compatible chat-completions endpoint, for every registered role.
 
-Works with OpenAI, vLLM, Ollama and llama.cpp server: images go as PNG data
-URLs, judge/analyze replies are constrained by a JSON schema, plans come back as
-function calls (one tool per recovery skill). Servers that refuse or ignore
-those strict options get the same requests in text mode (see `structured.py`).
-Transport retries with backoff (429, 5xx, timeouts) are the SDK's own; on top of
-that a reply that does not parse or validate is sent back to the model once with
-the error quoted. New roles reuse it all through `OpenAIReasoner.ask`.
+Works with OpenAI, vLLM, Ollama and llama.cpp server: the role's system prompt
+is the system message, the role's prompt plus the request (images as PNG data
+URLs) the user message; replies are constrained by the reply type's JSON schema,
+or arrive as function calls when the role routes them so (a peg recovery plan:
+one tool per skill). Servers that refuse or ignore those strict options get the
+same requests in text mode (see `structured.py`). Transport retries with backoff
+(429, 5xx, timeouts) are the SDK's own; on top of that a reply that does not
+parse, validate or pass the role's checks is sent back to the model once with
+the error quoted.
 """
 
 from __future__ import annotations
@@ -14,58 +16,33 @@ from __future__ import annotations
 import base64
 import json
 import os
-from functools import lru_cache
-from importlib import resources
-from typing import Any, Callable, TypeVar
+from typing import Any
 from urllib.parse import urlparse
 
 from openai import OpenAI
 from pydantic import BaseModel
 
 from kintsugi.core.errors import ConfigError
-from kintsugi.reasoning import REASONERS
-from kintsugi.reasoning.base import CallStats, redact
+from kintsugi.reasoning.base import CallStats, Check, redact
 from kintsugi.reasoning.jsontext import BadReply  # noqa: F401 - re-exported
-from kintsugi.reasoning.prompting import robot_section
+from kintsugi.reasoning.roles import Role
 from kintsugi.reasoning.structured import (  # noqa: F401 - EndpointError, strict_schema, MAX_ATTEMPTS re-exported
     MAX_ATTEMPTS,
     EndpointError,
     StructuredClient,
     StructuredOutput,
-    ToolRoute,
     strict_schema,
 )
-from kintsugi.methods.recovery.types import (
-    AnalyzeReply,
-    AnalyzeRequest,
-    JudgeReply,
-    JudgeRequest,
-    PlanReply,
-    PlanRequest,
-)
-from kintsugi.methods.recovery.validation import validate_analysis, validate_plan
 
 OPENAI_HOST = "api.openai.com"
 DEFAULT_OPENAI_MODEL = "gpt-4o"
 """The model the paper used; only a default when talking to OpenAI itself."""
 PLACEHOLDER_KEY = "sk-local-no-key"
 """Local servers ignore the key, but the SDK insists on one."""
-PLAN_TEXT_HINT = ('Write each function call as one step {"skill": <function name>, "goal": {<its arguments>}}, '
-                  'in execution order, inside {"steps": [...]}.')
-
 IMAGE_LABELS = {
     "outcome.image_png": "terminal camera image at the end of the skill",
     "goal_image_png": "goal image: this skill's terminal image in the default condition (what success looks like)",
 }
-
-M = TypeVar("M", bound=BaseModel)
-
-
-@lru_cache(maxsize=None)
-def load_prompt(name: str) -> str:
-    """Text of prompts/<name>.md, shipped as package data so users can read and edit it."""
-    return resources.files("kintsugi.reasoning").joinpath("prompts", f"{name}.md").read_text(encoding="utf-8")
-
 
 def _is_openai(base_url: str | None) -> bool:
     return base_url is None or (urlparse(base_url).hostname or "").endswith(OPENAI_HOST)
@@ -84,38 +61,8 @@ def resolve_api_key(api_key_env: str, base_url: str | None) -> str:
     return PLACEHOLDER_KEY
 
 
-def _plan_tools(request: PlanRequest) -> list[dict[str, Any]]:
-    """One function per recovery skill; its parameters are the skill's axes as absolute goals."""
-    tools = []
-    for skill, axes in request.skills.items():
-        current = request.goals.get(skill)
-        props = {}
-        for axis in axes:
-            unit = "degrees" if axis == "roll" else "mm"
-            now = f"; current goal {getattr(current, axis):g}" if current is not None else ""
-            props[axis] = {"type": "number", "description": f"absolute goal {axis} in {unit}{now}"}
-        tools.append(
-            {
-                "type": "function",
-                "function": {
-                    "name": skill,
-                    "description": f"Execute the {skill} skill with an absolute goal for {', '.join(axes)}. "
-                    f"Each value may differ from the current goal by at most {request.max_step_mm:g}.",
-                    "parameters": {
-                        "type": "object",
-                        "properties": props,
-                        "required": list(axes),
-                        "additionalProperties": False,
-                    },
-                    "strict": True,
-                },
-            }
-        )
-    return tools
-
-
 class OpenAIReasoner:
-    """Judge, analyze and plan by chat completions; `last_stats` holds the last call's cost."""
+    """Any role by chat completions; `last_stats` holds the last call's cost."""
 
     name = "openai"
 
@@ -146,40 +93,19 @@ class OpenAIReasoner:
     def last_stats(self, value: CallStats | None) -> None:
         self.structured.last_stats = value
 
-    # --- roles -------------------------------------------------------------
-    def judge(self, request: JudgeRequest) -> JudgeReply:
-        return self.ask("judge", request, JudgeReply)
-
-    def analyze(self, request: AnalyzeRequest) -> AnalyzeReply:
-        return self.ask("analyze", request, AnalyzeReply, check=lambda reply: validate_analysis(reply, request))
-
-    def plan(self, request: PlanRequest) -> PlanReply:
-        """Unclamped plan from the model's tool calls (or JSON steps); the caller clamps with validate_plan."""
-
-        def check(reply: PlanReply) -> PlanReply:
-            validate_plan(reply, request)  # structural errors go back to the model; clamping is the caller's
-            return reply
-
-        route = ToolRoute(tools=_plan_tools(request), text_hint=PLAN_TEXT_HINT,
-                          to_data=lambda calls: {"steps": [{"skill": name, "goal": args} for name, args in calls]})
-        return self.ask("plan", request, PlanReply, check=check, tools=route)
-
-    def ask(self, role: str, request: BaseModel, reply: type[M], *, check: Callable[[M], M] | None = None,
-            tools: ToolRoute | None = None, system: str = "system") -> M:
-        """Any role: prompts/<system>.md as the system message, prompts/<role>.md plus the request (images
-        attached) as the user message -> a validated `reply`.
-
-        A new role needs only its request/reply types and prompt files; strict
-        or text output, the repair round and accounting come from `structured`.
-        """
+    def answer(self, role: Role, request: BaseModel, check: Check | None = None) -> BaseModel:
+        """The role's system prompt as the system message, its prompt plus the request (images attached) as
+        the user message -> a validated, checked reply (strict or text output and one repair round come from
+        `structured`)."""
         messages: list[dict[str, Any]] = [
-            {"role": "system", "content": load_prompt(system)},
+            {"role": "system", "content": role.system_text()},
             {"role": "user", "content": self._user_content(role, request)},
         ]
-        return self.structured.ask(role, messages, reply, check=check, tools=tools)
+        tools = role.tools(request) if role.tools is not None else None
+        return self.structured.ask(role.name, messages, role.reply, check=check, tools=tools, prompt=role.prompt_path)
 
     # --- internals ---------------------------------------------------------
-    def _user_content(self, role: str, request: BaseModel) -> str | list[dict[str, Any]]:
+    def _user_content(self, role: Role, request: BaseModel) -> str | list[dict[str, Any]]:
         images: list[tuple[str, bytes]] = []
 
         def on_bytes(path: tuple[str, ...], data: bytes) -> str:
@@ -187,7 +113,8 @@ class OpenAIReasoner:
             return f"<image {len(images)}, attached below>"
 
         payload = redact(request, on_bytes)
-        text = f"{load_prompt(role)}\n\n{robot_section(request)}# Request\n```json\n{json.dumps(payload, indent=2)}\n```"
+        sections = role.sections(request) if role.sections is not None else ""
+        text = f"{role.prompt_text()}\n\n{sections}# Request\n```json\n{json.dumps(payload, indent=2)}\n```"
         if not images:
             return text
         parts: list[dict[str, Any]] = [{"type": "text", "text": text}]
@@ -198,14 +125,8 @@ class OpenAIReasoner:
         return parts
 
 
-@REASONERS.register(
-    "openai",
-    "any OpenAI-compatible chat-completions endpoint (OpenAI, vLLM, Ollama, llama.cpp): "
-    "set reasoner.model, reasoner.base_url, and the key in $OPENAI_API_KEY (or reasoner.api_key_env)",
-    tags=("network", "vlm"),
-)
-def make_openai_reasoner(settings: Any) -> OpenAIReasoner:
-    """Registry factory: ReasonerSettings -> OpenAIReasoner."""
+def make_openai_reasoner(settings: Any, options: Any = None) -> OpenAIReasoner:
+    """Registry factory: the common ReasonerSettings fields -> OpenAIReasoner (the backend has no options)."""
     return OpenAIReasoner(
         model=settings.model,
         base_url=settings.base_url,

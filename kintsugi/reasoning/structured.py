@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import json
 import re
-from dataclasses import dataclass
 from typing import Any, Callable, Literal, TypeVar, get_args
 
 import openai
@@ -29,8 +28,8 @@ from pydantic import BaseModel, ValidationError
 
 from kintsugi.core.errors import ConfigError, ReasoningError
 from kintsugi.reasoning.base import CallStats
-from kintsugi.reasoning.jsontext import BadReply, extract_json_object, loads_object
-from kintsugi.methods.recovery.validation import describe_validation_error
+from kintsugi.reasoning.jsontext import BadReply, describe_validation_error, extract_json_object, loads_object
+from kintsugi.reasoning.roles import ToolRoute  # noqa: F401 - re-exported
 
 StructuredOutput = Literal["auto", "strict", "text"]
 Mode = Literal["strict", "text"]
@@ -55,24 +54,6 @@ class _Refused(Exception):
     def __init__(self, reason: str) -> None:
         super().__init__(reason)
         self.reason = reason
-
-
-@dataclass(frozen=True)
-class ToolRoute:
-    """How a reply arrives as function calls in strict mode (e.g. a plan, one tool per skill).
-
-    `to_data` turns the ordered calls `[(name, arguments)]` into data for the
-    reply model; in text mode the model writes that data as JSON itself,
-    following `text_hint` and the tools' descriptions.
-    """
-
-    tools: list[dict[str, Any]]
-    to_data: Callable[[list[tuple[str, dict[str, Any]]]], Any]
-    text_hint: str = ""
-
-    @property
-    def names(self) -> list[str]:
-        return [t["function"]["name"] for t in self.tools]
 
 
 def strict_schema(model: type[BaseModel]) -> dict[str, Any]:
@@ -158,8 +139,10 @@ class StructuredClient:
         return "text" if self.structured_output == "text" or option in self.text_only else "strict"
 
     def ask(self, role: str, messages: list[dict[str, Any]], reply: type[M], *,
-            check: Callable[[M], M] | None = None, tools: ToolRoute | None = None) -> M:
+            check: Callable[[M], M] | None = None, tools: ToolRoute | None = None, prompt: str | None = None) -> M:
         """Messages -> a validated `reply`; `check` may raise ReasoningError to ask for one repair.
+
+        `prompt` is where the role's prompt file lives, named in the error when no reply is usable.
 
         With `tools`, strict mode asks for function calls and builds the reply
         with `tools.to_data`; text mode asks for the reply's JSON directly.
@@ -218,7 +201,7 @@ class StructuredClient:
                     msgs = with_instructions(msgs, fmt)
         raise ReasoningError(
             f"{role}: model {self.model!r} gave no usable reply in {MAX_ATTEMPTS} attempts; last problem: {problem}. "
-            f"Try a stronger model or check the prompt in kintsugi/reasoning/prompts/{role}.md"
+            + (f"Try a stronger model or check the prompt in {prompt}" if prompt else "Try a stronger model")
         )
 
     # --- internals ---------------------------------------------------------

@@ -8,7 +8,7 @@ from kintsugi.perception import checks
 from kintsugi.perception.checks import align_check, compression_check, fit_check, pose_check
 from kintsugi.perception.segment import PerceptionConfig, measure
 from kintsugi.perception.synthetic import HoleGeom, PegPose, default_calibration, draw_scene, peg_centred_at
-from kintsugi.methods.recovery.types import Pose
+from kintsugi.perception.types import Pose
 
 CALIB = default_calibration()
 HOLE_Y = 4.0

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 
 from kintsugi.perception import align_check, compare_to_goal, fit_check, measure
-from kintsugi.methods.recovery.types import CameraCalibration
+from kintsugi.perception.types import CameraCalibration
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 # PegWorld.calibration() for the default PegTaskConfig camera.

@@ -13,21 +13,26 @@ from tests.fake_openai_server import FakeOpenAIServer, content, fake_openai, han
 from kintsugi.core.errors import ConfigError, KintsugiError, ReasoningError, UnknownNameError
 from kintsugi.reasoning import REASONERS, make_reasoner
 from kintsugi.reasoning.base import Reasoner, RecordingReasoner
-from kintsugi.reasoning.openai_backend import EndpointError, OpenAIReasoner, load_prompt, strict_schema
+from kintsugi.reasoning.openai_backend import EndpointError, OpenAIReasoner, strict_schema
+from kintsugi.reasoning.roles import ask, read_prompt
+from kintsugi.methods.recovery import roles  # noqa: F401 - registers judge, analyze and plan
 from kintsugi.methods.recovery.types import (
     AnalyzeReply,
     AnalyzeRequest,
-    CameraCalibration,
-    CheckResult,
     JudgeReply,
     JudgeRequest,
     PlanReply,
     PlanRequest,
-    Pose,
     SkillOutcome,
 )
+from kintsugi.perception.types import CameraCalibration, CheckResult, Pose
 from kintsugi.methods.recovery.validation import validate_plan
 from kintsugi.core.record import ReasonerSettings
+
+
+def load_prompt(name: str) -> str:
+    """The peg recovery's prompt file prompts/<name>.md (beside its roles)."""
+    return read_prompt("kintsugi.methods.recovery", f"prompts/{name}.md")
 
 
 def tiny_png(value: int = 0) -> bytes:
@@ -86,7 +91,7 @@ def reasoner(server: FakeOpenAIServer, timeout_s: float = 5.0, max_retries: int 
 def test_judge_sends_images_schema_and_prompts(fake_openai: FakeOpenAIServer) -> None:
     fake_openai.push(content({"success": True, "explanation": "peg is inside like in the goal image"}, usage=(321, 17)))
     r = reasoner(fake_openai)
-    reply = r.judge(judge_request())
+    reply = ask(r, "judge", judge_request())
     assert reply == JudgeReply(success=True, explanation="peg is inside like in the goal image")
     assert (r.last_stats.tokens_in, r.last_stats.tokens_out, r.last_stats.attempts) == (321, 17, 1)
 
@@ -110,7 +115,7 @@ def test_judge_sends_images_schema_and_prompts(fake_openai: FakeOpenAIServer) ->
 
 def test_analyze_happy_path(fake_openai: FakeOpenAIServer) -> None:
     fake_openai.push(content(GOOD_ANALYSIS.model_dump(mode="json")))
-    assert reasoner(fake_openai).analyze(analyze_request()) == GOOD_ANALYSIS
+    assert ask(reasoner(fake_openai), "analyze", analyze_request()) == GOOD_ANALYSIS
     body = fake_openai.requests[0]
     assert body["response_format"]["json_schema"]["name"] == "AnalyzeReply"
     images = [p for p in body["messages"][1]["content"] if p["type"] == "image_url"]
@@ -119,7 +124,7 @@ def test_analyze_happy_path(fake_openai: FakeOpenAIServer) -> None:
 
 def test_plan_from_ordered_tool_calls(fake_openai: FakeOpenAIServer) -> None:
     fake_openai.push(tool_calls(("fit", {"y": 11.0}), ("align", {"y": 14.0}), ("insert", {"z": -20.0})))
-    reply = reasoner(fake_openai).plan(plan_request())
+    reply = ask(reasoner(fake_openai), "plan", plan_request())
     assert [(s.skill, s.goal) for s in reply.steps] == [("fit", {"y": 11.0}), ("align", {"y": 14.0}),
                                                        ("insert", {"z": -20.0})]
     body = fake_openai.requests[0]
@@ -133,7 +138,7 @@ def test_plan_from_ordered_tool_calls(fake_openai: FakeOpenAIServer) -> None:
 def test_plan_accepts_json_content_instead_of_tool_calls(fake_openai: FakeOpenAIServer) -> None:
     fake_openai.push(content("```json\n" + '{"steps": [{"skill": "align", "goal": {"y": 13}}, '
                              '{"skill": "insert", "goal": {}}]}' + "\n```"))
-    reply = reasoner(fake_openai).plan(plan_request())
+    reply = ask(reasoner(fake_openai), "plan", plan_request())
     assert [s.skill for s in reply.steps] == ["align", "insert"]
 
 
@@ -143,7 +148,7 @@ def test_plan_accepts_json_content_instead_of_tool_calls(fake_openai: FakeOpenAI
 def test_sdk_retries_transient_http_errors(fake_openai: FakeOpenAIServer, status: int) -> None:
     fake_openai.push(http_error(status), content({"success": False, "explanation": "peg on rim"}))
     r = reasoner(fake_openai)
-    assert r.judge(judge_request()).success is False
+    assert ask(r, "judge", judge_request()).success is False
     assert len(fake_openai.requests) == 2
     assert r.last_stats.attempts == 1  # transport retries are not repair attempts
 
@@ -151,7 +156,7 @@ def test_sdk_retries_transient_http_errors(fake_openai: FakeOpenAIServer, status
 def test_persistent_http_error_becomes_endpoint_error(fake_openai: FakeOpenAIServer) -> None:
     fake_openai.push(http_error(503), http_error(503))
     with pytest.raises(EndpointError, match="HTTP 503"):
-        reasoner(fake_openai, max_retries=1).judge(judge_request())
+        ask(reasoner(fake_openai, max_retries=1), "judge", judge_request())
     assert len(fake_openai.requests) == 2
 
 
@@ -159,7 +164,7 @@ def test_hang_times_out_is_retried_then_fails_cleanly(fake_openai: FakeOpenAISer
     fake_openai.push(hang(3.0), hang(3.0))
     start = time.perf_counter()
     with pytest.raises(EndpointError, match="within 0.5 s"):
-        reasoner(fake_openai, timeout_s=0.5, max_retries=1).judge(judge_request())
+        ask(reasoner(fake_openai, timeout_s=0.5, max_retries=1), "judge", judge_request())
     elapsed = time.perf_counter() - start
     assert len(fake_openai.requests) == 2
     assert 1.0 <= elapsed < 2.9  # two 0.5 s timeouts plus one backoff, not the 3 s hang
@@ -167,7 +172,7 @@ def test_hang_times_out_is_retried_then_fails_cleanly(fake_openai: FakeOpenAISer
 
 def test_hang_then_good_reply_recovers(fake_openai: FakeOpenAIServer) -> None:
     fake_openai.push(hang(3.0), content({"success": True, "explanation": "ok"}))
-    assert reasoner(fake_openai, timeout_s=0.5, max_retries=1).judge(judge_request()).success
+    assert ask(reasoner(fake_openai, timeout_s=0.5, max_retries=1), "judge", judge_request()).success
 
 
 # --- repair loop ------------------------------------------------------------
@@ -176,7 +181,7 @@ def test_malformed_json_is_repaired_once(fake_openai: FakeOpenAIServer) -> None:
     fake_openai.push(content('{"success": tru', usage=(50, 5)), content({"success": True, "explanation": "ok"},
                                                                         usage=(60, 6)))
     r = reasoner(fake_openai)
-    assert r.judge(judge_request()).success is True
+    assert ask(r, "judge", judge_request()).success is True
     assert (r.last_stats.attempts, r.last_stats.tokens_in, r.last_stats.tokens_out) == (2, 110, 11)
     second = fake_openai.requests[1]["messages"]
     assert second[2] == {"role": "assistant", "content": '{"success": tru'}
@@ -186,20 +191,20 @@ def test_malformed_json_is_repaired_once(fake_openai: FakeOpenAIServer) -> None:
 def test_malformed_twice_raises(fake_openai: FakeOpenAIServer) -> None:
     fake_openai.push(content("I think it worked!"), content("still not json"))
     with pytest.raises(ReasoningError, match="no usable reply in 2 attempts"):
-        reasoner(fake_openai).judge(judge_request())
+        ask(reasoner(fake_openai), "judge", judge_request())
     assert len(fake_openai.requests) == 2
 
 
 def test_refusal_is_reported_and_repaired(fake_openai: FakeOpenAIServer) -> None:
     fake_openai.push(refusal("I cannot help with that"), content({"success": True, "explanation": "ok"}))
-    assert reasoner(fake_openai).judge(judge_request()).success
+    assert ask(reasoner(fake_openai), "judge", judge_request()).success
     assert "refused (I cannot help with that)" in fake_openai.requests[1]["messages"][-1]["content"]
 
 
 def test_wrong_types_are_quoted_back(fake_openai: FakeOpenAIServer) -> None:
     fake_openai.push(content({"success": "maybe", "explanation": ["x"]}),
                      content({"success": False, "explanation": "fixed"}))
-    assert reasoner(fake_openai).judge(judge_request()).explanation == "fixed"
+    assert ask(reasoner(fake_openai), "judge", judge_request()).explanation == "fixed"
     repair = fake_openai.requests[1]["messages"][-1]["content"]
     assert "success" in repair and "explanation" in repair and "schema" in repair
 
@@ -208,7 +213,7 @@ def test_analysis_with_unowned_axis_is_repaired(fake_openai: FakeOpenAIServer) -
     bad = GOOD_ANALYSIS.model_dump(mode="json") | {"motions": [{"skill": "fit", "axis": "z", "delta": 1.0}]}
     fake_openai.push(content(bad), content(GOOD_ANALYSIS.model_dump(mode="json")))
     r = reasoner(fake_openai)
-    assert r.analyze(analyze_request()) == GOOD_ANALYSIS and r.last_stats.attempts == 2
+    assert ask(r, "analyze", analyze_request()) == GOOD_ANALYSIS and r.last_stats.attempts == 2
     assert "does not control axis 'z'" in fake_openai.requests[1]["messages"][-1]["content"]
 
 
@@ -216,7 +221,7 @@ def test_unknown_skill_tool_call_is_repaired(fake_openai: FakeOpenAIServer) -> N
     fake_openai.push(tool_calls(("grasp", {"y": 1.0}), ("insert", {"z": -20.0})),
                      tool_calls(("align", {"y": 13.0}), ("insert", {"z": -20.0})))
     r = reasoner(fake_openai)
-    reply = r.plan(plan_request())
+    reply = ask(r, "plan", plan_request())
     assert [s.skill for s in reply.steps] == ["align", "insert"] and r.last_stats.attempts == 2
     msgs = fake_openai.requests[1]["messages"]
     assistant, tool_msgs, user = msgs[2], msgs[3:5], msgs[5]
@@ -228,13 +233,13 @@ def test_unknown_skill_tool_call_is_repaired(fake_openai: FakeOpenAIServer) -> N
 def test_plan_with_wrong_axis_then_still_wrong_raises(fake_openai: FakeOpenAIServer) -> None:
     fake_openai.push(tool_calls(("insert", {"y": 3.0})), tool_calls(("insert", {"z": "deep"})))
     with pytest.raises(ReasoningError):
-        reasoner(fake_openai).plan(plan_request())
+        ask(reasoner(fake_openai), "plan", plan_request())
 
 
 def test_huge_goal_jump_is_accepted_then_clamped(fake_openai: FakeOpenAIServer) -> None:
     fake_openai.push(tool_calls(("align", {"y": 500.0}), ("insert", {"z": -20.0})))
     request = plan_request()
-    reply = reasoner(fake_openai).plan(request)
+    reply = ask(reasoner(fake_openai), "plan", request)
     assert reply.steps[0].goal == {"y": 500.0}  # the backend does not clamp ...
     plan = validate_plan(reply, request)  # ... the caller does
     assert plan.steps[0].goal == {"y": 17.0}  # current 12 + max step 5
@@ -250,9 +255,9 @@ def test_recording_reasoner_keeps_transcript(fake_openai: FakeOpenAIServer) -> N
                      content("nope"), content("nope again"))
     rec = RecordingReasoner(reasoner(fake_openai))
     assert isinstance(rec.inner, Reasoner)
-    rec.judge(judge_request())
+    ask(rec, "judge", judge_request())
     with pytest.raises(ReasoningError):
-        rec.judge(judge_request())
+        ask(rec, "judge", judge_request())
     ok, failed = rec.records
     assert (ok.role, ok.backend, ok.tokens_in, ok.tokens_out, ok.attempts) == ("judge", "openai", 400, 30, 1)
     assert ok.reply == {"success": True, "explanation": "ok"} and ok.error is None and ok.latency_s > 0
@@ -267,7 +272,7 @@ def test_recording_reasoner_records_endpoint_errors(fake_openai: FakeOpenAIServe
     fake_openai.push(http_error(400, retry_after_s=None))
     rec = RecordingReasoner(reasoner(fake_openai))
     with pytest.raises(EndpointError):
-        rec.plan(plan_request())
+        ask(rec, "plan", plan_request())
     assert rec.records[0].role == "plan" and "HTTP 400" in rec.records[0].error
 
 
@@ -297,7 +302,7 @@ def test_unreachable_server_is_endpoint_error() -> None:
         url = server.base_url
     r = OpenAIReasoner(model="m", base_url=url, api_key_env="KINTSUGI_TEST_NO_SUCH_KEY", timeout_s=1, max_retries=0)
     with pytest.raises(EndpointError, match="cannot reach"):
-        r.judge(judge_request())
+        ask(r, "judge", judge_request())
 
 
 def test_strict_schema_requires_every_field() -> None:
@@ -318,4 +323,4 @@ def test_prompts_state_units_and_stage_conventions() -> None:
 
 def test_plan_reply_type_is_unclamped_plan_reply(fake_openai: FakeOpenAIServer) -> None:
     fake_openai.push(tool_calls(("insert", {"z": -21.0})))
-    assert isinstance(reasoner(fake_openai).plan(plan_request()), PlanReply)
+    assert isinstance(ask(reasoner(fake_openai), "plan", plan_request()), PlanReply)

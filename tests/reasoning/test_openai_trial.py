@@ -3,11 +3,9 @@
 from __future__ import annotations
 
 from tests.fake_openai_server import FakeOpenAIServer, content, fake_openai, tool_calls  # noqa: F401
-from kintsugi.core.plugins import load_builtins
-from kintsugi.core.registry import TASKS
 from kintsugi.core.record import ReasonerSettings, TrialSpec
-
-load_builtins()
+from kintsugi.core.runner import run_trial
+from kintsugi.methods.recovery.skill_log import PegFigures
 
 ANALYSIS = {"what_happened": "fit judged failed", "why": "scripted", "how_to_recover": "retry fit",
             "restart_from": "fit", "motions": [{"skill": "fit", "axis": "y", "delta": 0.0}]}
@@ -28,12 +26,12 @@ def test_recovery_trial_over_the_openai_protocol(fake_openai: FakeOpenAIServer) 
         content({"success": True, "explanation": "align ok"}),
         content({"success": True, "explanation": "insert ok"}),
     )
-    rec = TASKS.get("peg-insertion").factory().run(_spec(fake_openai))
+    rec = run_trial(_spec(fake_openai))
     assert rec.error is None
     assert rec.success and rec.framework_success
     assert [c["role"] for c in rec.transcript] == ["judge", "analyze", "plan", "judge", "judge", "judge"]
     assert all(c["backend"] == "openai" and c["tokens_in"] > 0 and c["latency_s"] > 0 for c in rec.transcript)
-    assert rec.transitions == [("fit", "fit")] and rec.extra_executions["fit"] == 1
+    assert rec.transitions == [("fit", "fit")] and PegFigures.of(rec).extra_executions["fit"] == 1
     first = fake_openai.requests[0]["messages"][-1]["content"]
     assert any(part.get("type") == "image_url" and part["image_url"]["url"].startswith("data:image/png;base64,")
                for part in first if isinstance(part, dict))
@@ -46,7 +44,7 @@ def test_unusable_plans_end_the_trial_with_a_recorded_reasoning_error(fake_opena
         tool_calls(("teleport", {"y": 0.0})),  # unknown skill
         tool_calls(("teleport", {"y": 0.0})),  # still unknown after the repair round
     )
-    rec = TASKS.get("peg-insertion").factory().run(_spec(fake_openai))
+    rec = run_trial(_spec(fake_openai))
     assert rec.error is not None and "teleport" in rec.error
     assert not rec.framework_success
     assert rec.reasoning_errors == 1 and rec.transcript[-1]["role"] == "plan"

@@ -11,6 +11,7 @@ from kintsugi.core.config import StrictModel
 from kintsugi.core.errors import ConfigError, ReasoningError
 from kintsugi.reasoning.base import RecordingReasoner
 from kintsugi.reasoning.openai_backend import EndpointError, OpenAIReasoner
+from kintsugi.reasoning.roles import ask
 from kintsugi.methods.recovery.types import JudgeReply
 from tests.fake_openai_server import FakeOpenAIServer, content, http_error, tool_calls
 from tests.reasoning.test_openai_backend import GOOD_ANALYSIS, analyze_request, judge_request, plan_request
@@ -41,12 +42,12 @@ def test_auto_falls_back_once_per_option_and_records_it(status: int) -> None:
         server.push(content(JUDGE_OK), content(GOOD_ANALYSIS.model_dump(mode="json")), content(PLAN_OK),
                     content(JUDGE_OK), content(PLAN_OK))
         rec = RecordingReasoner(make(server))
-        assert rec.judge(judge_request()) == JudgeReply(**JUDGE_OK)
-        assert rec.analyze(analyze_request()) == GOOD_ANALYSIS
-        assert [(s.skill, s.goal) for s in rec.plan(plan_request()).steps] == [("align", {"y": 14.0}),
+        assert ask(rec, "judge", judge_request()) == JudgeReply(**JUDGE_OK)
+        assert ask(rec, "analyze", analyze_request()) == GOOD_ANALYSIS
+        assert [(s.skill, s.goal) for s in ask(rec, "plan", plan_request()).steps] == [("align", {"y": 14.0}),
                                                                               ("insert", {"z": -20.0})]
-        rec.judge(judge_request())
-        rec.plan(plan_request())
+        ask(rec, "judge", judge_request())
+        ask(rec, "plan", plan_request())
         # each option was refused once; every later request went straight to text mode
         assert server.refused == 2 and len(server.requests) == 7
         sent = [strict_keys(b) for b in server.requests]
@@ -64,8 +65,8 @@ def test_auto_keeps_strict_for_the_option_the_server_accepts() -> None:
     with FakeOpenAIServer(refuse={"tool_choice"}) as server:
         server.push(content(PLAN_OK), content(JUDGE_OK))
         rec = RecordingReasoner(make(server))
-        rec.plan(plan_request())
-        rec.judge(judge_request())
+        ask(rec, "plan", plan_request())
+        ask(rec, "judge", judge_request())
         assert [strict_keys(b) for b in server.requests] == [{"tools", "tool_choice"}, set(), {"response_format"}]
         assert [r.output_mode for r in rec.records] == ["text", "strict"]
 
@@ -75,7 +76,7 @@ def test_strict_mode_surfaces_a_clear_error_and_does_not_retry() -> None:
         rec = RecordingReasoner(make(server, "strict"))
         with pytest.raises(EndpointError, match="refused strict structured output for judge .*HTTP 400.*"
                                                 "json_schema.*--structured-output auto or text"):
-            rec.judge(judge_request())
+            ask(rec, "judge", judge_request())
         assert len(server.requests) == 1 and rec.errors == 1 and "EndpointError" in rec.records[0].error
 
 
@@ -84,10 +85,10 @@ def test_text_mode_never_sends_strict_options() -> None:
         server.push(content(JUDGE_OK), content(GOOD_ANALYSIS.model_dump(mode="json")),
                     content(json.dumps(PLAN_OK)), tool_calls(("grasp", {"y": 1})), content(PLAN_OK))
         rec = RecordingReasoner(make(server, "text"))
-        rec.judge(judge_request())
-        rec.analyze(analyze_request())
-        rec.plan(plan_request())
-        rec.plan(plan_request())  # a stray tool call is repaired like any bad reply
+        ask(rec, "judge", judge_request())
+        ask(rec, "analyze", analyze_request())
+        ask(rec, "plan", plan_request())
+        ask(rec, "plan", plan_request())  # a stray tool call is repaired like any bad reply
         assert server.refused == 0 and all(not strict_keys(b) for b in server.requests)
         plan_prompt = user_text(server.requests[2])
         assert "Do not call functions" in plan_prompt and '"steps"' in plan_prompt
@@ -108,7 +109,7 @@ def test_text_mode_parses_what_small_models_write(reply: str) -> None:
     with FakeOpenAIServer() as server:
         server.push(content(reply))
         r = make(server, "text")
-        assert r.judge(judge_request()) == JudgeReply(**JUDGE_OK) and r.last_stats.attempts == 1
+        assert ask(r, "judge", judge_request()) == JudgeReply(**JUDGE_OK) and r.last_stats.attempts == 1
 
 
 def test_garbage_gets_one_repair_round_then_a_recorded_reasoning_error() -> None:
@@ -116,11 +117,11 @@ def test_garbage_gets_one_repair_round_then_a_recorded_reasoning_error() -> None
         server.push(content("The peg looks fine to me."), content(JUDGE_OK),
                     content("Still no JSON, sorry."), content('{"success": "probably"}'))
         rec = RecordingReasoner(make(server))
-        assert rec.judge(judge_request()).success and rec.records[0].attempts == 2
+        assert ask(rec, "judge", judge_request()).success and rec.records[0].attempts == 2
         repair = server.requests[2]["messages"][-1]["content"]
         assert "no JSON object" in repair and "Answer again" in repair
         with pytest.raises(ReasoningError, match="no usable reply in 2 attempts"):
-            rec.judge(judge_request())
+            ask(rec, "judge", judge_request())
         failed = rec.records[1]
         assert failed.reply is None and failed.attempts == 2 and failed.output_mode == "text"
         assert "ReasoningError" in failed.error and "does not match the schema" in failed.error
@@ -133,10 +134,10 @@ def test_auto_detects_a_server_that_ignores_the_strict_options() -> None:
                     content(PLAN_OK),  # tool_choice="required" ignored: JSON content, no tool call
                     content(JUDGE_OK), content(PLAN_OK))
         rec = RecordingReasoner(make(server))
-        rec.judge(judge_request())
-        rec.plan(plan_request())
-        rec.judge(judge_request())
-        rec.plan(plan_request())
+        ask(rec, "judge", judge_request())
+        ask(rec, "plan", plan_request())
+        ask(rec, "judge", judge_request())
+        ask(rec, "plan", plan_request())
         sent = [strict_keys(b) for b in server.requests]
         assert sent == [{"response_format"}, set(), {"tools", "tool_choice"}, set(), set()]
         # the repair turn after an ignored option carries the format the prompt did not have
@@ -150,8 +151,8 @@ def test_strict_mode_ignored_options_are_repaired_without_switching() -> None:
     with FakeOpenAIServer() as server:
         server.push(content("It worked."), content(JUDGE_OK), content(JUDGE_OK))
         r = make(server, "strict")
-        r.judge(judge_request())
-        r.judge(judge_request())
+        ask(r, "judge", judge_request())
+        ask(r, "judge", judge_request())
         assert all(strict_keys(b) == {"response_format"} for b in server.requests)
 
 
@@ -160,7 +161,7 @@ def test_unrelated_http_400_is_not_a_fallback() -> None:
         server.push(http_error(400, retry_after_s=None))
         r = make(server)
         with pytest.raises(EndpointError, match="HTTP 400"):
-            r.judge(judge_request())
+            ask(r, "judge", judge_request())
         assert r.structured.text_only == {}
 
 

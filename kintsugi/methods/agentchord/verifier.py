@@ -12,8 +12,9 @@ from typing import Any
 
 from pydantic import TypeAdapter, ValidationError
 
-from kintsugi.methods.agentchord.composer import looks_upright
+from kintsugi.methods.agentchord.facts import looks_upright
 from kintsugi.reasoning.jsontext import BadReply
+from kintsugi.reasoning.roles import ROLES, Role, ask
 from kintsugi.methods.agentchord.types import VerifyReply, VerifyRequest
 from kintsugi.taskgraph.constraints import Constraint
 from kintsugi.taskgraph.features import ArmState, Features, ObjectState
@@ -64,10 +65,13 @@ def embedded_verify(request: VerifyRequest) -> VerifyReply:
     return VerifyReply(success=True, explanation=f"{request.subgoal}: met")
 
 
+VERIFY = ROLES.register(Role(name="verify", request=VerifyRequest, reply=VerifyReply,
+                             package="kintsugi.methods.agentchord", embedded=embedded_verify, system="system_taskgraph"))
+
+
 def ask_verify(reasoner: Any, request: VerifyRequest) -> VerifyReply:
-    from kintsugi.reasoning.roles import ask_role
+    """The verify role on any backend (recorded when the reasoner records)."""
+    return ask(reasoner, "verify", request)
 
-    return ask_role(reasoner, "verify", request, VerifyReply, embedded_verify, system="system_taskgraph")
 
-
-__all__ = ["ObjectState", "ask_verify", "embedded_verify", "features_of"]
+__all__ = ["ObjectState", "VERIFY", "ask_verify", "embedded_verify", "features_of"]

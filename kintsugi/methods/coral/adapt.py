@@ -21,6 +21,7 @@ from pydantic import ValidationError
 
 from kintsugi.methods.coral.types import AdaptReply, AdaptRequest, FormulationReply, ObjectPrior
 from kintsugi.reasoning.jsontext import BadReply
+from kintsugi.reasoning.roles import ROLES, Role, ask
 from kintsugi.methods.coral.priors import DENSITY_BOUNDS_KG_M3, FRICTION_BOUNDS, MASS_BOUNDS_KG
 from kintsugi.sandbox import CostProgram, ProbeLimits
 
@@ -190,10 +191,12 @@ def check_adaptation(reply: AdaptReply, req: AdaptRequest, samples: int, steps: 
     return reply.model_copy(update={"beliefs": beliefs}), plan, program, notes
 
 
+ADAPT = ROLES.register(Role(name="adapt", request=AdaptRequest, reply=AdaptReply, package="kintsugi.methods.coral",
+                         embedded=embedded_adaptation, system="system_contact"))
+
+
 def ask_adaptation(reasoner: Any, req: AdaptRequest, samples: int, steps: int, limits: ProbeLimits = ProbeLimits()
                    ) -> tuple[AdaptReply, FormulationReply, CostProgram | None, list[str]]:
-    from kintsugi.reasoning.roles import ask_role
-
     found: dict[str, Any] = {}
 
     def check(reply: AdaptReply) -> AdaptReply:
@@ -201,8 +204,8 @@ def ask_adaptation(reasoner: Any, req: AdaptRequest, samples: int, steps: int, l
         found.update(plan=plan, program=program, notes=notes)
         return checked
 
-    reply = ask_role(reasoner, "adapt", req, AdaptReply, embedded_adaptation, check, system="system_contact")
+    reply = ask(reasoner, "adapt", req, check)
     return reply, found["plan"], found["program"], found["notes"]
 
 
-__all__ = ["ask_adaptation", "check_adaptation", "check_beliefs", "embedded_adaptation", "parse_adaptation"]
+__all__ = ["ADAPT", "ask_adaptation", "check_adaptation", "check_beliefs", "embedded_adaptation", "parse_adaptation"]

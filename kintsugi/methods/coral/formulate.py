@@ -22,6 +22,7 @@ from pydantic import ValidationError
 from kintsugi.core.errors import SandboxError
 from kintsugi.methods.coral.types import FormulationReply, FormulationRequest, RegionSpec, StageSpec, seed_functions
 from kintsugi.reasoning.jsontext import BadReply
+from kintsugi.reasoning.roles import ROLES, Role, ask
 from kintsugi.sandbox import FUNCTIONS, CostProgram, ProbeLimits, probe
 
 ROLLOUT_VARS: dict[str, str] = {
@@ -283,11 +284,14 @@ def embedded_formulation(req: FormulationRequest) -> FormulationReply:
         raise ReasoningError(f"embedded formulation: {exc}") from None
 
 
+FORMULATE = ROLES.register(Role(name="formulate", request=FormulationRequest, reply=FormulationReply,
+                                package="kintsugi.methods.coral", embedded=embedded_formulation,
+                                system="system_contact"))
+
+
 def ask_formulation(reasoner: Any, req: FormulationRequest, samples: int, steps: int,
                     limits: ProbeLimits = ProbeLimits()) -> tuple[FormulationReply, CostProgram, list[str]]:
     """The formulation role on any backend, checked end to end (the openai backend gets one repair round)."""
-    from kintsugi.reasoning.roles import ask_role
-
     found: dict[str, Any] = {}
 
     def check(reply: FormulationReply) -> FormulationReply:
@@ -295,7 +299,7 @@ def ask_formulation(reasoner: Any, req: FormulationRequest, samples: int, steps:
         found.update(program=program, notes=notes)
         return checked
 
-    reply = ask_role(reasoner, "formulate", req, FormulationReply, embedded_formulation, check, system="system_contact")
+    reply = ask(reasoner, "formulate", req, check)
     return reply, found["program"], found["notes"]
 
 
@@ -307,5 +311,5 @@ def _clamp(value: float, lo: float, hi: float, what: str, notes: list[str]) -> f
     return clamped
 
 
-__all__ = ["ask_formulation", "check_formulation", "embedded_formulation", "parse_formulation", "request_variables",
+__all__ = ["FORMULATE", "ask_formulation", "check_formulation", "embedded_formulation", "parse_formulation", "request_variables",
            "sample_env", "variable_docs"]

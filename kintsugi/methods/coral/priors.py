@@ -21,6 +21,7 @@ from pydantic import ValidationError
 
 from kintsugi.methods.coral.types import ObjectPrior, PriorsReply, PriorsRequest
 from kintsugi.reasoning.jsontext import BadReply
+from kintsugi.reasoning.roles import ROLES, Role, ask
 
 
 @dataclass(frozen=True)
@@ -115,11 +116,13 @@ def check_priors(reply: PriorsReply, request: PriorsRequest) -> tuple[PriorsRepl
     return PriorsReply(objects=out, reasoning=reply.reasoning), notes
 
 
+PRIORS = ROLES.register(Role(name="priors", request=PriorsRequest, reply=PriorsReply, package="kintsugi.methods.coral",
+                          embedded=embedded_priors, system="system_contact"))
+
+
 def ask_priors(reasoner: Any, request: PriorsRequest) -> tuple[PriorsReply, list[str]]:
     """The priors role on any backend (embedded table or a model endpoint), checked and clamped; the notes
     say what was clamped or dropped. Recorded in the transcript when the reasoner records."""
-    from kintsugi.reasoning.roles import ask_role
-
     notes: list[str] = []
 
     def check(reply: PriorsReply) -> PriorsReply:
@@ -127,7 +130,7 @@ def ask_priors(reasoner: Any, request: PriorsRequest) -> tuple[PriorsReply, list
         notes[:] = found
         return checked
 
-    reply = ask_role(reasoner, "priors", request, PriorsReply, embedded_priors, check, system="system_contact")
+    reply = ask(reasoner, "priors", request, check)
     return reply, notes
 
 
@@ -139,4 +142,4 @@ def _clamp(value: float, lo: float, hi: float, what: str, notes: list[str]) -> f
     return clamped
 
 
-__all__ = ["MATERIALS", "Material", "ask_priors", "check_priors", "embedded_priors", "material_of", "parse_priors"]
+__all__ = ["PRIORS", "MATERIALS", "Material", "ask_priors", "check_priors", "embedded_priors", "material_of", "parse_priors"]

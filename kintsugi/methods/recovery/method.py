@@ -24,22 +24,22 @@ from kintsugi.methods.recovery.skill_log import log_skill, peg_figures
 from kintsugi.perception.checks import align_check, compression_check, fit_check, pose_check
 from kintsugi.perception.compare import compare_to_goal
 from kintsugi.perception.segment import PerceptionConfig, measure
+from kintsugi.perception.types import CameraCalibration, CheckResult, Pose
 from kintsugi.reasoning import make_reasoner
 from kintsugi.reasoning.base import RecordingReasoner
+from kintsugi.reasoning.roles import ask
+from kintsugi.methods.recovery import roles  # noqa: F401 - registers judge, analyze and plan
 from kintsugi.methods.recovery.types import (
     AnalyzeRequest,
     Attempt,
-    CheckResult,
-    CameraCalibration,
     JudgeReply,
     JudgeRequest,
     PlanRequest,
-    Pose,
-    RobotDescription,
     SkillOutcome,
 )
 from kintsugi.methods.recovery.validation import validate_plan
 from kintsugi.worlds.peg.context import PegContext
+from kintsugi.worlds.peg.description import RobotDescription
 from kintsugi.worlds.peg.goals import full_goals
 from kintsugi.worlds.peg.robot import PegRobot, to_pose
 from kintsugi.worlds.peg.skills import SEQUENCE, SKILLS, SkillResult
@@ -127,7 +127,7 @@ class Recovery:
                 continue
             outcome = self._outcome(robot, result)
             checks = self._checks(skill, result, outcome)
-            verdict = self.reasoner.judge(JudgeRequest(
+            verdict = ask(self.reasoner, "judge", JudgeRequest(
                 task=self.ctx.task_text, outcome=outcome, checks=checks, success_criteria=criteria(skill, self.robot),
                 goal_image_png=self.goal_png[skill], calibration=robot.calibration,
                 side_calibration=robot.side_calibration, robot=self.robot))
@@ -181,7 +181,7 @@ class Recovery:
                  verdict: JudgeReply, history: list[Attempt]) -> list[str]:
         rec = self.cfg.recovery
         skills = {s: list(SKILLS[s].axes) for s in self.allowed}
-        analysis = self.reasoner.analyze(AnalyzeRequest(
+        analysis = ask(self.reasoner, "analyze", AnalyzeRequest(
             task=self.ctx.task_text, outcome=outcome, checks=checks, verdict=verdict, goals=self._pose_goals(),
             history=history[-6:], calibration=robot.calibration, side_calibration=robot.side_calibration,
             max_step_mm=rec.max_step_mm, skills=skills, goal_image_png=self.goal_png[outcome.skill],
@@ -189,7 +189,7 @@ class Recovery:
         log.say(f"         analysis: {analysis.what_happened} Why: {analysis.why} How: {analysis.how_to_recover}")
         request = PlanRequest(task=self.ctx.task_text, analysis=analysis, goals=self._pose_goals(), skills=skills,
                               max_step_mm=rec.max_step_mm, workspace=self.workspace, robot=self.robot)
-        plan = validate_plan(self.reasoner.plan(request), request)
+        plan = validate_plan(ask(self.reasoner, "plan", request), request)
         for step in plan.steps:
             self.goals[step.skill].update(step.goal)
         for note in plan.notes:

@@ -20,15 +20,9 @@ from pydantic import ValidationError
 
 from kintsugi.core.config import StrictModel
 from kintsugi.core.errors import ReasoningError
-from kintsugi.methods.recovery.types import (
-    AnalyzeReply,
-    AnalyzeRequest,
-    Axis,
-    PlanReply,
-    PlanRequest,
-    Pose,
-    RecoverySkill,
-)
+from kintsugi.reasoning.jsontext import describe_validation_error  # noqa: F401 - re-exported
+from kintsugi.methods.recovery.types import AnalyzeReply, AnalyzeRequest, PlanReply, PlanRequest, RecoverySkill
+from kintsugi.perception.types import Axis, Pose
 
 
 def _max_plan_steps() -> int:
@@ -58,18 +52,6 @@ class ValidatedStep(StrictModel):
 class ValidatedPlan(StrictModel):
     steps: list[ValidatedStep]
     notes: list[str] = []
-
-
-def describe_validation_error(exc: ValidationError, limit: int = 8) -> str:
-    """Compact 'where: what' lines from a pydantic error, without echoing huge inputs."""
-    lines = []
-    for err in exc.errors(include_url=False, include_input=False)[:limit]:
-        where = ".".join(str(p) for p in err["loc"]) or "(top level)"
-        lines.append(f"{where}: {err['msg']}")
-    more = exc.error_count() - limit
-    if more > 0:
-        lines.append(f"... and {more} more problems")
-    return "; ".join(lines)
 
 
 def _fmt(x: float) -> str:

@@ -14,7 +14,8 @@ from typing import Callable
 
 import numpy as np
 
-from kintsugi.methods.recovery.types import CameraCalibration, Pose, RobotDescription
+from kintsugi.perception.types import CameraCalibration, Pose
+from kintsugi.worlds.peg.description import RobotDescription
 from kintsugi.worlds.peg.config import PegTaskConfig
 from kintsugi.worlds.peg.goals import full_goals
 from kintsugi.worlds.peg.shapes import MM, peg_shape

@@ -24,7 +24,7 @@ import numpy as np
 from kintsugi.core.config import StrictModel
 from kintsugi.core.errors import ConfigError, UnknownNameError
 from kintsugi.core.health import check_health
-from kintsugi.methods.recovery.types import CameraCalibration
+from kintsugi.perception.types import CameraCalibration
 from kintsugi.worlds.peg.config import PegTaskConfig
 from kintsugi.worlds.peg.scene import build_mjcf
 from kintsugi.worlds.peg.shapes import MM, gap_along, hole_for, peg_shape

@@ -7,7 +7,7 @@ import json
 
 import pytest
 
-import kintsugi.methods.agentchord.arranger as arranger
+import kintsugi.methods.agentchord.merging as merging
 from kintsugi.methods.agentchord.compile import compile_graph
 from kintsugi.reasoning import make_reasoner
 from kintsugi.core.plugins import load_builtins
@@ -32,7 +32,7 @@ def _branches(name: str) -> list[str]:
 @pytest.mark.parametrize("name", TASK_NAMES)
 def test_the_nominal_shortcut_keeps_every_branch(name: str, monkeypatch: pytest.MonkeyPatch) -> None:
     taken: list[str] = []
-    shortcut = arranger._nominal_merge
+    shortcut = merging._nominal_merge
 
     def counted(*args):  # noqa: ANN002, ANN202
         found = shortcut(*args)
@@ -40,8 +40,8 @@ def test_the_nominal_shortcut_keeps_every_branch(name: str, monkeypatch: pytest.
             taken.append(found[0])
         return found
 
-    monkeypatch.setattr(arranger, "_nominal_merge", counted)
+    monkeypatch.setattr(merging, "_nominal_merge", counted)
     fast = _branches(name)
     assert taken, f"{name}: no failure left a nominal node's facts (the shortcut is untested here)"
-    monkeypatch.setattr(arranger, "_nominal_merge", lambda *args: None)
+    monkeypatch.setattr(merging, "_nominal_merge", lambda *args: None)
     assert _branches(name) == fast

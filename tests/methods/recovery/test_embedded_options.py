@@ -19,8 +19,8 @@ import pytest
 
 from kintsugi.core.config import apply_overrides
 from kintsugi.methods.recovery.method import to_png
+from kintsugi.methods.recovery import embedded
 from kintsugi.methods.recovery.embedded import (
-    EmbeddedReasoner,
     allowed_only,
     combined_tilt,
     tipping_lean_deg,
@@ -29,12 +29,12 @@ from kintsugi.methods.recovery.embedded import (
 from kintsugi.methods.recovery.types import (
     AnalyzeReply,
     AnalyzeRequest,
-    CameraCalibration,
     JudgeReply,
     JudgeRequest,
     RelativeMotion,
     SkillOutcome,
 )
+from kintsugi.perception.types import CameraCalibration
 from kintsugi.worlds.peg.config import RECOVERY_SKILL_NAMES, PegTaskConfig
 from kintsugi.worlds.peg.goals import full_goals, load_goals
 from kintsugi.worlds.peg.robot import describe_robot, to_pose
@@ -42,7 +42,7 @@ from kintsugi.worlds.peg.skills import SKILLS, execute_skill
 from kintsugi.worlds.peg.world import HOME_POSE, PegWorld, TrialParams
 
 GOALS = load_goals()
-REASONER = EmbeddedReasoner()
+REASONER = embedded  # the embedded answers: judge(request), analyze(request), plan(request)
 CFG = apply_overrides(PegTaskConfig(), {"recovery.skills": list(RECOVERY_SKILL_NAMES)})
 ROBOT = describe_robot(CFG, "round", GOALS)
 ALL_SKILLS = {s: list(SKILLS[s].axes) for s in RECOVERY_SKILL_NAMES}

@@ -20,17 +20,11 @@ import pytest
 from kintsugi.core.config import apply_overrides
 from kintsugi.core.errors import ReasoningError
 from kintsugi.methods.recovery.method import to_png
-from kintsugi.methods.recovery.embedded import ALIGN_GAIN, EmbeddedReasoner, fit_released, look, realign_shift
-from kintsugi.methods.recovery.types import (
-    AnalyzeRequest,
-    CameraCalibration,
-    CheckResult,
-    HsvRange,
-    JudgeReply,
-    JudgeRequest,
-    RobotDescription,
-    SkillOutcome,
-)
+from kintsugi.methods.recovery import embedded
+from kintsugi.methods.recovery.embedded import ALIGN_GAIN, fit_released, look, realign_shift
+from kintsugi.methods.recovery.types import AnalyzeRequest, JudgeReply, JudgeRequest, SkillOutcome
+from kintsugi.perception.types import CameraCalibration, CheckResult, HsvRange
+from kintsugi.worlds.peg.description import RobotDescription
 from kintsugi.worlds.peg.config import PegTaskConfig
 from kintsugi.worlds.peg.goals import full_goals, load_goals
 from kintsugi.worlds.peg.robot import describe_robot, to_pose
@@ -38,7 +32,7 @@ from kintsugi.worlds.peg.skills import execute_skill
 from kintsugi.worlds.peg.world import HOME_POSE, GroundTruth, PegWorld, TrialParams
 
 GOALS = load_goals()
-REASONER = EmbeddedReasoner()
+REASONER = embedded  # the embedded answers: judge(request), analyze(request), plan(request)
 
 
 @dataclass(frozen=True)

@@ -14,14 +14,13 @@ from kintsugi.core.errors import ReasoningError
 from kintsugi.methods.recovery.types import (
     AnalyzeReply,
     AnalyzeRequest,
-    CameraCalibration,
     JudgeReply,
     PlanReply,
     PlanRequest,
     PlanStep,
-    Pose,
     SkillOutcome,
 )
+from kintsugi.perception.types import CameraCalibration, Pose
 from kintsugi.methods.recovery.validation import (
     MAX_PLAN_STEPS,
     PlanInvalid,

@@ -9,47 +9,50 @@ import pytest
 
 from kintsugi.core.errors import ReasoningError
 from kintsugi.reasoning import REASONERS
+from kintsugi.reasoning.scripted import ScriptedReasoner
 from kintsugi.methods.recovery.types import AnalyzeReply, JudgeReply, PlanReply, PlanStep, RelativeMotion
 from kintsugi.core.plugins import load_builtins
-from kintsugi.core.registry import TASKS
+from kintsugi.core.runner import run_trial
+from kintsugi.methods.recovery.skill_log import PegFigures
 from kintsugi.core.record import ReasonerSettings, TrialSpec
 
 load_builtins()
 
 
 class Scripted:
-    """A reasoner whose verdicts and plans come from a script, for logic tests."""
+    """Verdicts and plans from a script, for logic tests (answered through the scripted backend)."""
 
-    name = "scripted"
     verdicts: list[bool] = []
     plan_reply: PlanReply | Exception = PlanReply(steps=[PlanStep(skill="fit", goal={"y": 0.0})])
+    calls = 0
 
-    def __init__(self) -> None:
-        self.calls = 0
+    @classmethod
+    def reply(cls, role: str, req):  # noqa: ANN001, ANN206
+        if role == "judge":
+            ok = cls.verdicts[cls.calls] if cls.calls < len(cls.verdicts) else False
+            cls.calls += 1
+            return JudgeReply(success=ok, explanation="scripted")
+        if role == "analyze":
+            return AnalyzeReply(what_happened="x", why="y", how_to_recover="z", restart_from="fit",
+                                motions=[RelativeMotion(skill="fit", axis="y", delta=1.0)])
+        if isinstance(cls.plan_reply, Exception):
+            raise cls.plan_reply
+        return cls.plan_reply
 
-    def judge(self, req):  # noqa: ANN001, ANN201
-        ok = Scripted.verdicts[self.calls] if self.calls < len(Scripted.verdicts) else False
-        self.calls += 1
-        return JudgeReply(success=ok, explanation="scripted")
 
-    def analyze(self, req):  # noqa: ANN001, ANN201
-        return AnalyzeReply(what_happened="x", why="y", how_to_recover="z", restart_from="fit",
-                            motions=[RelativeMotion(skill="fit", axis="y", delta=1.0)])
-
-    def plan(self, req):  # noqa: ANN001, ANN201
-        if isinstance(Scripted.plan_reply, Exception):
-            raise Scripted.plan_reply
-        return Scripted.plan_reply
+def _scripted(settings, options):  # noqa: ANN001, ANN202
+    Scripted.calls = 0
+    return ScriptedReasoner(Scripted.reply)
 
 
 if "scripted-test" not in REASONERS:
-    REASONERS.register("scripted-test", "test double")(lambda settings: Scripted())
+    REASONERS.register("scripted-test", "test double")(_scripted)
 
 
 def _run(seed: int = 0, condition: str = "none", **overrides):  # noqa: ANN003, ANN202
     spec = TrialSpec(task="peg-insertion", method="recovery", variant="square", condition=condition, seed=seed,
                      overrides=overrides, reasoner=ReasonerSettings(backend="scripted-test"))
-    return TASKS.get("peg-insertion").factory().run(spec)
+    return run_trial(spec)
 
 
 def test_consecutive_failures_end_the_trial_as_timeout() -> None:
@@ -82,7 +85,7 @@ def test_reasoning_error_is_recorded_not_raised() -> None:
 
 def test_default_condition_recovery_succeeds_with_embedded_reasoner() -> None:
     spec = TrialSpec(task="peg-insertion", method="recovery", variant="round", condition="none", seed=0)
-    rec = TASKS.get("peg-insertion").factory().run(spec)
+    rec = run_trial(spec)
     assert rec.success and rec.framework_success
     assert rec.reasoning_calls == 3  # one verdict per checked skill, no recovery needed
     assert [c["role"] for c in rec.transcript] == ["judge", "judge", "judge"]
@@ -91,19 +94,19 @@ def test_default_condition_recovery_succeeds_with_embedded_reasoner() -> None:
 def test_embedded_reasoner_recovers_a_displaced_hole() -> None:
     """Hole 18 mm right of where the goals were taught: baseline fails, recovery finds it."""
     overrides = {"hole.y_offset_mm": [18.0, 18.0], "grasp.angle_deg": [0.0, 0.0]}
-    task = TASKS.get("peg-insertion").factory()
-    base = task.run(TrialSpec(task="peg-insertion", method="baseline", variant="round", condition="pose",
+    base = run_trial(TrialSpec(task="peg-insertion", method="baseline", variant="round", condition="pose",
                               seed=0, overrides=overrides))
-    rec = task.run(TrialSpec(task="peg-insertion", method="recovery", variant="round", condition="pose",
+    rec = run_trial(TrialSpec(task="peg-insertion", method="recovery", variant="round", condition="pose",
                              seed=0, overrides=overrides))
     assert not base.success
     assert rec.success and rec.framework_success
-    assert sum(rec.extra_executions.values()) >= 1
+    assert sum(PegFigures.of(rec).extra_executions.values()) >= 1
 
 
 def test_embedded_reasoner_never_imports_the_simulator() -> None:
-    code = ("import sys, kintsugi.methods.recovery.embedded; "
-            "bad = [m for m in sys.modules if m == 'mujoco' or m.startswith('kintsugi.worlds')]; "
+    code = ("import sys, kintsugi.methods.recovery.roles; "
+            "bad = [m for m in sys.modules if m == 'mujoco' or m.startswith('kintsugi.worlds') and m not in "
+            "('kintsugi.worlds', 'kintsugi.worlds.peg', 'kintsugi.worlds.peg.description')]; "
             "print(bad); sys.exit(1 if bad else 0)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert out.returncode == 0, out.stdout + out.stderr

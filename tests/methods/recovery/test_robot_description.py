@@ -7,9 +7,9 @@ from importlib import resources
 
 from tests.fake_openai_server import FakeOpenAIServer, content, fake_openai  # noqa: F401
 from kintsugi.core.config import apply_overrides
-from kintsugi.reasoning.prompting import robot_facts
+from kintsugi.methods.recovery.prompting import robot_facts
 from kintsugi.core.plugins import load_builtins
-from kintsugi.core.registry import TASKS
+from kintsugi.core.runner import run_trial
 from kintsugi.worlds.peg.config import PegTaskConfig
 from kintsugi.worlds.peg.goals import load_goals
 from kintsugi.worlds.peg.robot import PegRobot
@@ -55,7 +55,7 @@ def test_description_follows_set() -> None:
 
 
 def test_prompt_files_state_no_robot_numbers_or_randomization() -> None:
-    prompts = resources.files("kintsugi.reasoning").joinpath("prompts")
+    prompts = resources.files("kintsugi.methods.recovery").joinpath("prompts")
     for name in ("system", "judge", "analyze", "plan"):
         text = prompts.joinpath(f"{name}.md").read_text(encoding="utf-8")
         for fixed in ("±", "°", "2 mm", "42 mm", "1 mm", "140"):
@@ -68,7 +68,7 @@ def test_openai_requests_state_the_configured_robot_and_never_the_ranges(fake_op
     spec = TrialSpec(task="peg-insertion", method="recovery", variant="square", condition="all", seed=0,
                      overrides=overrides, reasoner=ReasonerSettings(backend="openai", model="scripted",
                                                                      base_url=fake_openai.base_url, max_retries=0))
-    rec = TASKS.get("peg-insertion").factory().run(spec)
+    rec = run_trial(spec)
     assert rec.error is None and len(fake_openai.requests) == 3
     for body in fake_openai.requests:
         system, user = body["messages"][0]["content"], body["messages"][1]["content"]

@@ -1,6 +1,6 @@
 """The "This robot" section of a prompt, written from the request's robot description.
 
-The prompt files (`prompts/*.md`) say nothing numeric about the robot or the
+The prompt files (`kintsugi/methods/recovery/prompts/*.md`) say nothing numeric about the robot or the
 task: its sizes, clearance, springs and tolerances come from the request's
 `RobotDescription` (built from the config the robot runs with), so
 `--set peg.clearance_mm=1` is what the model is told. Trial randomization
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 from pydantic import BaseModel
 
-from kintsugi.methods.recovery.types import RobotDescription
+from kintsugi.worlds.peg.description import RobotDescription
 
 
 def robot_section(request: BaseModel) -> str:
