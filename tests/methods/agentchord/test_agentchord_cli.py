@@ -5,12 +5,14 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import pytest
 from typer.testing import CliRunner
 
 from kintsugi.cli import app
 from kintsugi.taskgraph.model import TaskGraph
 
 
+@pytest.mark.slow
 def test_graph_prints_and_draws_the_compiled_graph(tmp_path: Path) -> None:
     png, dot, js = tmp_path / "g.png", tmp_path / "g.dot", tmp_path / "g.json"
     r = CliRunner().invoke(app, ["graph", "pour-single", "--out", str(png), "--dot", str(dot), "--json", str(js)])

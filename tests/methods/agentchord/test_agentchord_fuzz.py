@@ -11,6 +11,8 @@ import random
 from collections import Counter
 from types import SimpleNamespace
 
+import pytest
+
 from kintsugi.core.errors import ReasoningError
 from kintsugi.methods.agentchord.arranger import check_arrangement, embedded_arrange
 from kintsugi.methods.agentchord.composer import check_composition, embedded_compose
@@ -243,6 +245,7 @@ def test_hostile_composer_replies_are_rejected_clearly() -> None:
     assert outcomes["rejected"] > 0.8 * N_COMPOSER
 
 
+@pytest.mark.slow
 def test_hostile_arranger_replies_are_rejected_or_repaired() -> None:
     rng = random.Random(12)
     outcomes: Counter[str] = Counter()

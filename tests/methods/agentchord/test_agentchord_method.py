@@ -16,6 +16,7 @@ def _trial(condition: str, seed: int, **overrides):
                                seed=seed, overrides=overrides))
 
 
+@pytest.mark.slow
 def test_nominal_pour_compiles_once_and_runs_without_reasoning() -> None:
     r = _trial("none", 0)
     assert r.error is None and r.success and r.framework_success
@@ -29,6 +30,7 @@ def test_nominal_pour_compiles_once_and_runs_without_reasoning() -> None:
     assert m.monitors == 12 and m.graph_nodes > 7  # drop and slip on four carries, drop on the place, three on the grasp
 
 
+@pytest.mark.slow
 def test_a_drop_runs_the_precompiled_forward_recovery() -> None:
     r = _trial("drop", 22, **{"disturbance.drop_p": 0.1})  # seed 22 drops the bottle during the lift
     assert any(e.kind == "disturbance" for e in r.events)
@@ -79,6 +81,7 @@ def test_an_unreachable_keyframe_is_refused_with_the_solvers_message() -> None:
     assert abs(call["xyz"][1] - (-0.1)) < 0.02 and call["xyz"][2] >= 0.09 + 0.02 - 1e-3
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method, calls", [("agentchord-bt", 2), ("rekep", 1)])
 def test_backtracking_baselines_go_back_to_a_subgoal_that_holds(method: str, calls: int) -> None:
     r = run_trial(TrialSpec(task="pour-single", method=method, variant="default", condition="drop", seed=22,

@@ -6,7 +6,6 @@ from __future__ import annotations
 
 import json
 
-from tests.fake_openai_server import FakeOpenAIServer, content, fake_openai  # noqa: F401
 from kintsugi.methods.agentchord.domain import TABLETOP_DOMAIN
 from kintsugi.methods.agentchord.observe import seen_arms, seen_objects
 from kintsugi.methods.agentchord.method import metrics_of
@@ -14,8 +13,10 @@ from kintsugi.methods.agentchord.arranger import embedded_arrange
 from kintsugi.methods.agentchord.composer import embedded_compose
 from kintsugi.methods.agentchord.types import ArrangerRequest, ComposerRequest
 from kintsugi.core.plugins import load_builtins
-from kintsugi.core.registry import TASKS
 from kintsugi.core.record import ReasonerSettings, TrialSpec
+from kintsugi.core.registry import TASKS
+from kintsugi.core.runner import run_trial
+from tests.fake_openai_server import FakeOpenAIServer, content
 
 load_builtins()
 
@@ -47,7 +48,7 @@ def _model_replies() -> tuple[dict, dict]:
 def test_agentchord_trial_over_the_openai_protocol(fake_openai: FakeOpenAIServer) -> None:
     composed, arranged = _model_replies()
     fake_openai.push(content(composed), content(arranged))
-    rec = TASKS.get("pour-single").factory().run(_spec(fake_openai))
+    rec = run_trial(_spec(fake_openai))
     assert rec.error is None and rec.success and rec.framework_success
     assert [(c["role"], c["backend"]) for c in rec.transcript] == [("composer", "openai"), ("arranger", "openai")]
     assert metrics_of(rec).runtime_reasoning_calls == 0 and len(fake_openai.requests) == 2
@@ -58,7 +59,7 @@ def test_agentchord_trial_over_the_openai_protocol(fake_openai: FakeOpenAIServer
 def test_an_unusable_graph_is_a_recorded_reasoning_error(fake_openai: FakeOpenAIServer) -> None:
     bad = {"graph": {"start": "a", "goal": "a", "nodes": [{"id": "a"}]}, "reasoning": "nothing to do"}
     fake_openai.push(content(bad), content("not even JSON"))
-    rec = TASKS.get("pour-single").factory().run(_spec(fake_openai))
+    rec = run_trial(_spec(fake_openai))
     assert rec.error is not None and "composer" in rec.error and not rec.framework_success
     assert rec.reasoning_errors == 1 and rec.transcript[-1]["role"] == "composer"
     assert "start and goal are the same node" in json.dumps(fake_openai.requests[1]["messages"])

@@ -46,6 +46,7 @@ def test_inner_monologue_verifies_every_subgoal_at_run_time() -> None:
     assert m.runtime_reasoning_calls == 6 == sum(1 for c in r.transcript if c["role"] == "verify")
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["doremi", "code-as-monitor"])
 def test_a_drop_makes_the_reasoner_plan_again(method: str) -> None:
     r = _trial(method, 22)  # the bottle drops during the lift
@@ -103,6 +104,7 @@ def test_a_replanned_stand_up_gets_monitors_the_constraints_accept() -> None:
     assert "not_grasped" in kinds
 
 
+@pytest.mark.slow
 def test_a_baseline_replans_a_fallen_bottle_with_what_it_saw_first() -> None:
     r = run_trial(TrialSpec(task="pour-dual", method="inner-monologue", variant="default", condition="drop",
                             seed=47, overrides={"disturbance.drop_p": 0.1}))  # seed 47: the bottle drops and lies
@@ -113,6 +115,7 @@ def test_a_baseline_replans_a_fallen_bottle_with_what_it_saw_first() -> None:
     assert "stand_up(right, bottle)" in composers[1]["reply"]["edge_operators"].values()
 
 
+@pytest.mark.slow
 def test_a_baseline_keeps_the_robots_memory_of_tops_across_replans() -> None:
     """Which end of a fallen bottle is its top is the robot's own memory (AgentChord keeps it for the whole
     trial); a re-plan must not forget it, or standing the bottle up turns the hand a fixed quarter turn the arm
@@ -124,6 +127,7 @@ def test_a_baseline_keeps_the_robots_memory_of_tops_across_replans() -> None:
     assert any(e.kind == "replan" for e in r.events)
 
 
+@pytest.mark.slow
 def test_a_replan_keeps_a_goal_fact_an_operator_can_undo() -> None:
     """Coffee-tray seed 0 at drop p 0.10: the tray falls from both hands at the end of the carry. `released(tray)`
     held at the start; remembered as done, it was left out of the re-plan's goal, and the plan ended with both
@@ -136,4 +140,4 @@ def test_a_replan_keeps_a_goal_fact_an_operator_can_undo() -> None:
                             overrides={"disturbance.drop_p": 0.1}))
     assert r.error is None, r.error
     assert any(e.kind == "replan" for e in r.events)
-    assert r.success and r.framework_success and r.details["released"]
+    assert r.success and r.framework_success and r.task_figures["released"]

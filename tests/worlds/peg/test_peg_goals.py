@@ -14,7 +14,7 @@ import pytest
 from kintsugi.core.config import apply_overrides
 from kintsugi.core.errors import ConfigError
 from kintsugi.core.plugins import load_builtins
-from kintsugi.core.registry import TASKS
+from kintsugi.core.runner import run_trial
 from kintsugi.worlds.peg import context as context_module
 from kintsugi.worlds.peg.config import PegTaskConfig
 from kintsugi.worlds.peg.context import PegContext, config_changes
@@ -55,7 +55,7 @@ def test_retaught_goals_are_used_and_accepted(tmp_path) -> None:  # noqa: ANN001
     ctx = PegContext(cfg=apply_overrides(PegTaskConfig(), overrides), shape="round")
     assert ctx.goals["fit"] == {"y": 6.0}
     assert "insert" in ctx.goal_images()
-    rec = TASKS.get("peg-insertion").factory().run(TrialSpec(
+    rec = run_trial(TrialSpec(
         task="peg-insertion", method="recovery", variant="round", condition="none", seed=0, overrides=overrides))
     assert rec.error is None and rec.success and rec.framework_success
     assert rec.skills[2].goal["y"] == pytest.approx(6.0)  # fit ran the re-taught goal

@@ -13,7 +13,19 @@ from kintsugi.methods.agentchord.method import metrics_of
 from kintsugi.core.record import TrialSpec
 from kintsugi.core.runner import run_trial
 
+STEP_SLACK = 0.002
+"""How far AgentChord may run past a baseline's steps on the same seed, as a fraction of them. A settle ends
+when a read finds the object at rest, so machine-dependent floating point (CPU, BLAS build) can move a trial
+by a control step (on seed 64 AgentChord takes rekep's 1662 steps on one machine, one more on another);
+0.2 % of ~1600 steps is ~3 steps, far below the 24-27 that a second settle costs."""
 
+
+def within(steps: int, baseline_steps: int) -> bool:
+    """No more steps than the baseline's, up to the floating-point slack."""
+    return steps <= baseline_steps * (1 + STEP_SLACK)
+
+
+@pytest.mark.slow
 @pytest.mark.parametrize(("seed", "rekep_steps"), [(56, 1565), (64, 1662)])
 def test_a_disturbed_recovery_settles_once(seed: int, rekep_steps: int) -> None:
     r = run_trial(TrialSpec(task="handover-block", method="agentchord", variant="default", condition="drop",
@@ -24,9 +36,10 @@ def test_a_disturbed_recovery_settles_once(seed: int, rekep_steps: int) -> None:
     settles = [s for s in r.skills if s.skill == "open_gripper" and s.recovery]
     assert len(settles) <= 9  # two settles of at most five reads each (seed 56 took 12 when it settled twice)
     m = metrics_of(r)
-    assert m.recoveries == 2 and m.episode_steps <= rekep_steps
+    assert m.recoveries == 2 and within(m.episode_steps, rekep_steps), m.episode_steps
 
 
+@pytest.mark.slow
 def test_a_recovery_into_the_goal_is_judged_without_waiting_again() -> None:
     """Pour-single seed 41: the bottle drops as the hand turns it back from pouring; the branch lets it come to
     rest and merges into the goal (it has poured, and the bottle is out of the hand). Code-as-monitor, which
@@ -36,4 +49,4 @@ def test_a_recovery_into_the_goal_is_judged_without_waiting_again() -> None:
     assert r.error is None, r.error
     assert r.success and r.framework_success
     m = metrics_of(r)
-    assert m.recoveries == 1 and m.episode_steps <= 885
+    assert m.recoveries == 1 and within(m.episode_steps, 885), m.episode_steps
