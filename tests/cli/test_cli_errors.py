@@ -15,6 +15,7 @@ from typer.testing import CliRunner
 from kintsugi.cli import _record_path, app
 from kintsugi.core.errors import ReasoningError
 from kintsugi.reasoning import REASONERS
+from kintsugi.reasoning.scripted import ScriptedReasoner
 from kintsugi.methods.recovery.types import AnalyzeReply, JudgeReply, PlanReply, PlanStep, RelativeMotion
 from kintsugi.core.record import ReasonerSettings, TrialRecord, TrialSpec
 
@@ -23,31 +24,28 @@ MARKUP = "[/INST] [bold]not bold[/x]"
 
 class MarkupReasoner:
     """Replies full of markup-like text; the first judgement fails so analyze and plan run too.
-    With `fail=True` the judge raises, as an unreachable endpoint does."""
-
-    name = "markup"
+    With `fail=True` the judge raises, as an unreachable endpoint does (answered through the scripted backend)."""
 
     def __init__(self, fail: bool = False) -> None:
         self.fail = fail
         self.judged = 0
 
-    def judge(self, req):  # noqa: ANN001, ANN201
-        if self.fail:
-            raise ReasoningError(f"cannot reach http://127.0.0.1:9/v1 {MARKUP}")
-        self.judged += 1
-        return JudgeReply(success=self.judged > 1, explanation=f"judged {MARKUP}")
-
-    def analyze(self, req):  # noqa: ANN001, ANN201
-        return AnalyzeReply(what_happened=MARKUP, why=MARKUP, how_to_recover=MARKUP, restart_from="fit",
-                            motions=[RelativeMotion(skill="fit", axis="y", delta=1.0)])
-
-    def plan(self, req):  # noqa: ANN001, ANN201
+    def __call__(self, role: str, req):  # noqa: ANN001, ANN204
+        if role == "judge":
+            if self.fail:
+                raise ReasoningError(f"cannot reach http://127.0.0.1:9/v1 {MARKUP}")
+            self.judged += 1
+            return JudgeReply(success=self.judged > 1, explanation=f"judged {MARKUP}")
+        if role == "analyze":
+            return AnalyzeReply(what_happened=MARKUP, why=MARKUP, how_to_recover=MARKUP, restart_from="fit",
+                                motions=[RelativeMotion(skill="fit", axis="y", delta=1.0)])
         return PlanReply(steps=[PlanStep(skill="fit", goal={"y": 400.0})])  # clamped: a plan-clamped event
 
 
 for _name, _fail in (("markup-test", False), ("unreachable-test", True)):
     if _name not in REASONERS:
-        REASONERS.register(_name, f"test double {MARKUP}")(lambda settings, f=_fail: MarkupReasoner(fail=f))
+        REASONERS.register(_name, f"test double {MARKUP}")(
+            lambda settings, options, f=_fail: ScriptedReasoner(MarkupReasoner(fail=f), where="markup"))
 
 
 def invoke(*args: str):  # noqa: ANN201
@@ -180,12 +178,12 @@ def test_bench_rejects_bad_input_before_the_first_trial(tmp_path: Path, monkeypa
 
 def test_bench_with_errored_trials_says_so_and_exits_nonzero(tmp_path: Path) -> None:
     out = tmp_path / "out"
-    res = invoke("bench", "fake-coin", "--plugin", "tests.fake_tasks", "--methods", "baseline",
+    res = invoke("bench", "fake-coin", "--plugin", "tests.fake_tasks", "--methods", "plain",
                  "--shapes", "raises", "--conditions", "easy", "--trials", "2", "--executor", "inline", "--out", out)
     assert res.exit_code == 1
     # Not a terminal: one plain progress line per finished trial.
-    assert "1/2 fake-coin/baseline/raises/easy/0: failure" in res.stderr and "2/2 " in res.stderr
-    assert ("error: 1 of 2 trials errored (they count as failures); first: fake-coin/baseline/raises/easy/0: "
+    assert "1/2 fake-coin/plain/raises/easy/0: failure" in res.stderr and "2/2 " in res.stderr
+    assert ("error: 1 of 2 trials errored (they count as failures); first: fake-coin/plain/raises/easy/0: "
             "RuntimeError: fake failure on seed 0") in res.stderr
     assert len((out / "results.jsonl").read_text().splitlines()) == 2  # nothing lost
     assert "1 of 2 trials errored" in (out / "report.md").read_text()
