@@ -1,5 +1,5 @@
 """Table I of system-B campaigns (one results.jsonl each), as `kintsugi bench` prints it: the package's tables
-(`kintsugi.campaign.tables.tables_for`, system B's Table I from `kintsugi/methods/agentchord/tables.py`: success
+(`kintsugi.campaign.tables.tables_for`, system B's Table I from `kintsugi/campaign/systems/tabletop.py`: success
 with a Wilson 95 % interval, episode steps, sim, execution and modelled time, reasoning calls, the steps and
 modelled time of completed trials, recoveries, recovery latency, and the paired figures against AgentChord on
 the same seeds), then the detection delay read from the trials' event logs: a drop -> the monitor's firing,

@@ -1,6 +1,6 @@
 """CoRAL campaign figures from recorded trials: system C's Table I as `kintsugi bench` prints it (success with
 Wilson CI, attempts, the cost code's share of the MPPI step, where the cost came from, and the physics error of
-the beliefs each attempt planned with), from `kintsugi/methods/coral/tables.py`.
+the beliefs each attempt planned with), from `kintsugi/campaign/systems/contact.py`.
 
 Reads the `results.jsonl` of one or more `kintsugi bench` campaign directories (run the campaign first, e.g.
 `kintsugi bench push-force --methods coral,l2r --conditions all --trials 10 --workers 1
@@ -26,7 +26,7 @@ from kintsugi.campaign.render import print_tables  # noqa: E402
 from kintsugi.campaign.tables import tables_for  # noqa: E402
 from kintsugi.core.plugins import load_builtins  # noqa: E402
 from kintsugi.core.record import TrialRecord  # noqa: E402
-from kintsugi.methods.coral.tables import summarize  # noqa: E402
+from kintsugi.campaign.systems.contact import summarize  # noqa: E402
 
 
 def main() -> None:

@@ -8,7 +8,7 @@ workers do not import rich/matplotlib):
 - executors.EXECUTORS (registry: process, inline, ray)
 - store.ResultStore(out_dir): .read(), .done_keys(), .load_config()
 - tables.tables_for(task or system, records, cfg) -> list[TextTable]: the system's own tables
-  (kintsugi/methods/*/tables.py) + success_table + timing_table
+  (kintsugi/campaign/systems/) + success_table + timing_table
 - render.print_tables(tables, console), to_markdown, to_html
 - report.write_report(out_dir, cfg=None, records=None) -> (report.md, report.html)
 """

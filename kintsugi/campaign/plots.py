@@ -74,7 +74,7 @@ def success_plot(records: Sequence[TrialRecord], cfg: CampaignConfig | None = No
 def extra_executions_plot(records: Sequence[TrialRecord], cfg: CampaignConfig | None = None) -> bytes | None:
     """Mean extra executions per contact formation (system A's `PegFigures`), a panel per variant, pooled
     over conditions. None when no trial recorded any extra execution (nothing to plot)."""
-    from kintsugi.methods.recovery.tables import extra_executions, ordered_skills
+    from kintsugi.campaign.systems.peg import extra_executions, ordered_skills
 
     recs = [r for r in records if r.error is None]
     extras = {id(r): extra_executions(r) for r in recs}

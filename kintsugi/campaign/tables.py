@@ -3,8 +3,8 @@
 `tables_for(task or system, records, cfg)` picks the tables by the task's `system` attribute
 (`peg`, `tabletop`, `contact`, or whatever a plugin registers with `register_tables`) and always
 adds the generic success table and the cost table. A task of no known system gets the generic
-tables only. The systems' own tables live beside their methods (`kintsugi/methods/*/tables.py`);
-the built-in ones are imported only when a campaign of that system is tabulated.
+tables only. The built-in systems' own tables (`kintsugi/campaign/systems/`) are imported only when a
+campaign of that system is tabulated.
 
 Conventions shared by every table:
 - Cells are (method, variant, condition), in config order first, then cells only the records know.
@@ -37,9 +37,9 @@ class TextTable:
 TableBuilder = Callable[[Sequence[TrialRecord], "CampaignConfig | None"], list[TextTable]]
 
 _BUILDERS: dict[str, TableBuilder | str] = {
-    "peg": "kintsugi.methods.recovery.tables:system_tables",
-    "tabletop": "kintsugi.methods.agentchord.tables:system_tables",
-    "contact": "kintsugi.methods.coral.tables:system_tables",
+    "peg": "kintsugi.campaign.systems.peg:system_tables",
+    "tabletop": "kintsugi.campaign.systems.tabletop:system_tables",
+    "contact": "kintsugi.campaign.systems.contact:system_tables",
 }
 """System -> its tables' builder, or "module:function" imported on first use."""
 

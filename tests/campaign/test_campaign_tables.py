@@ -10,7 +10,7 @@ from kintsugi.campaign.tables import register_tables, success_table, tables_for,
 from kintsugi.core.record import TrialRecord
 from kintsugi.core.registry import TASKS
 from kintsugi.methods.recovery.skill_log import PegFigures
-from kintsugi.methods.recovery.tables import table_ii, table_iii
+from kintsugi.campaign.systems.peg import table_ii, table_iii
 
 
 def rec(method, condition, seed, **kw):

@@ -3,7 +3,7 @@
 from kintsugi.campaign.plan import CampaignConfig
 from kintsugi.core.record import TrialRecord
 from kintsugi.methods.agentchord.method import RunFigures
-from kintsugi.methods.agentchord.tables import table_i
+from kintsugi.campaign.systems.tabletop import table_i
 
 CFG = CampaignConfig(task="pour-single", methods=["agentchord", "rekep", "scripted"], variants=["default"],
                      conditions=["drop"], trials=4)
