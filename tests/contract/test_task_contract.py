@@ -124,6 +124,7 @@ def test_task_attributes_are_coherent(task: str) -> None:
         made.check_variant("no-such-variant", made.config({}))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize(("task", "variant"), CASES)
 def test_task_contract(task: str, variant: str, stepped: dict[int, mujoco.MjData]) -> None:
     # The reference method's trial: no error, physics stepped, no NaN anywhere in the record.
@@ -143,6 +144,7 @@ def test_task_contract(task: str, variant: str, stepped: dict[int, mujoco.MjData
     _check_physics(task, stepped)  # every simulation the three trials stepped
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("task", TASK_NAMES)
 def test_condition_none_is_the_nominal_world(task: str) -> None:
     """Seeds differ only where the condition randomizes: under "none" the hidden truth is fixed."""
@@ -176,3 +178,18 @@ def test_bad_override_becomes_a_recorded_error() -> None:
     assert record.error and "ConfigError" in record.error and "hole.no_such_key" in record.error
     record = run_trial(_spec("peg-insertion", "round", overrides={"peg.clearance_mm": -1}))
     assert record.error and "peg.clearance_mm" in record.error
+
+
+def test_the_physics_check_sees_a_stepped_simulations_warnings(stepped: dict[int, mujoco.MjData]) -> None:
+    model = mujoco.MjModel.from_xml_string("<mujoco><worldbody><body><freejoint/><geom size='0.1'/></body>"
+                                           "</worldbody></mujoco>")
+    data = mujoco.MjData(model)
+    mujoco.mj_step(model, data)
+    _check_physics("a ball", stepped)
+    data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number = 1
+    with pytest.raises(AssertionError, match="mjWARN_BADQACC"):
+        _check_physics("a ball", stepped)
+    data.warning[mujoco.mjtWarning.mjWARN_BADQACC].number = 0
+    data.qvel[0] = np.nan
+    with pytest.raises(AssertionError, match="qvel"):
+        _check_physics("a ball", stepped)

@@ -12,14 +12,14 @@ from pydantic import Field
 
 from kintsugi.core.config import StrictModel
 from kintsugi.core.log import TrialLog
-from kintsugi.core.record import Figures
+from kintsugi.core.record import Figures, SkillLog
 from kintsugi.core.registry import METHODS
 from kintsugi.methods.scripted import describe
 from kintsugi.worlds.tabletop.task import expand
 
 
 class FirstActionsSettings(StrictModel):
-    max_actions: int = Field(2, ge=1)
+    max_actions: int = Field(1, ge=1)
     """Actions of the script to run before stopping."""
 
 
@@ -44,9 +44,12 @@ class FirstActions:
                 break
             result = robot.execute(action)
             ran, reached = ran + 1, reached + result.reached
+            log.skill(SkillLog(skill=result.action, goal={}, terminal={}, reached=result.reached,
+                               message=result.message, sim_time=round(robot.sim_time, 4)))
             log.say(f"{robot.sim_time:6.2f}s {describe(action)} -> {'reached' if result.reached else 'missed'}")
         log.figures(FirstActionsFigures(ran=ran, reached=reached, stopped_early=stopped))
         return reached == ran and not stopped
+
 
 METHODS.register("toy-first-actions", "toy plugin: a tabletop task's script, stopped after method.max_actions",
                  tags=("system-b",), config=FirstActionsSettings)(FirstActions)
