@@ -13,6 +13,7 @@ import pytest
 
 from kintsugi.core.errors import ConfigError, KintsugiError
 from kintsugi.core.record import SkillLog, TrialRecord
+from kintsugi.methods.agentchord.method import RunFigures
 
 h5py = pytest.importorskip("h5py")
 pq = pytest.importorskip("pyarrow.parquet")
@@ -49,11 +50,12 @@ def _record(campaign: Path) -> TrialRecord:
     return r
 
 
+@pytest.mark.slow
 def test_hdf5_holds_observations_actions_and_both_segments(campaign: Path, hdf5_export) -> None:
     rep = hdf5_export
     assert [e.key for e in rep.exported] == [KEY] and not rep.refused
     rec = _record(campaign)
-    steps = json.loads(next(e.detail for e in rec.events if e.kind == "metrics"))["episode_steps"]
+    steps = RunFigures.of(rec).episode_steps
     with h5py.File(rep.path) as f:
         demo = f["data/demo_0"]
         t = int(demo.attrs["num_samples"])
@@ -99,6 +101,7 @@ def test_hdf5_holds_observations_actions_and_both_segments(campaign: Path, hdf5_
     assert manifest["format"] == "hdf5" and manifest["exported"][0]["key"] == KEY
 
 
+@pytest.mark.slow
 def test_lerobot_layout_reads_back_and_agrees_with_hdf5(campaign: Path, hdf5_export, tmp_path: Path) -> None:
     import imageio.v2 as imageio
 
@@ -141,6 +144,7 @@ def test_lerobot_layout_reads_back_and_agrees_with_hdf5(campaign: Path, hdf5_exp
         assert np.abs(frames[j].astype(float) - h5_top[2 * j]).mean() < 6.0
 
 
+@pytest.mark.slow
 def test_a_record_the_rerun_does_not_reproduce_is_refused(campaign: Path, tmp_path: Path) -> None:
     from kintsugi.export import export_campaign
 
@@ -156,6 +160,7 @@ def test_a_record_the_rerun_does_not_reproduce_is_refused(campaign: Path, tmp_pa
     assert not (tmp_path / "out" / "demo.hdf5").exists()
 
 
+@pytest.mark.slow
 def test_bad_filters_rates_and_outputs_are_clear_errors(campaign: Path, tmp_path: Path) -> None:
     from typer.testing import CliRunner
 
