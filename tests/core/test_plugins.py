@@ -1,5 +1,6 @@
 """Where registry entries come from: `load_plugins` modules and installed packages' `kintsugi.plugins`
-entry points (here a fake distribution's, by replacing the entry-point lookup), each failure one line."""
+entry points (a replaced entry-point lookup, and a tiny dist-info on the path); every failure is one line
+naming the module or entry point."""
 
 from __future__ import annotations
 
@@ -113,3 +114,18 @@ def test_a_module_that_does_not_import_is_one_clear_error(isolated: Path, module
     assert "\n" not in message
     for needle in needles:
         assert needle in message, message
+
+
+def test_an_installed_distribution_is_found_on_the_path(isolated: Path) -> None:
+    """A real (if tiny) installed distribution: its dist-info names the entry points importlib finds."""
+    dist = isolated / "kintsugi_fake_tasks-1.0.dist-info"
+    dist.mkdir()
+    (dist / "METADATA").write_text("Metadata-Version: 2.1\nName: kintsugi-fake-tasks\nVersion: 1.0\n")
+    (dist / "entry_points.txt").write_text("[kintsugi.plugins]\ntoy = kintsugi_dist_tasks\n")
+    _write(isolated, "kintsugi_dist_tasks", PLUGIN)
+    plugins.load_builtins()
+    assert "toy-from-entry-point" in TASKS
+    (dist / "entry_points.txt").write_text("[kintsugi.plugins]\nbroken = kintsugi_dist_missing\n")
+    with pytest.raises(ConfigError, match="entry point 'broken' of package 'kintsugi-fake-tasks' "
+                                          r"\(kintsugi_dist_missing\) failed to load: ModuleNotFoundError"):
+        plugins.load_builtins()
