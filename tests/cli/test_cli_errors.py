@@ -117,11 +117,12 @@ def test_negative_seed_is_a_usage_error() -> None:
     assert res.exit_code == 2 and "--seed" in res.output
 
 
+@pytest.mark.slow
 def test_default_record_path_names_the_reasoner(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.chdir(tmp_path)
     res = invoke("run", "peg-insertion", "--seed", "1")
     assert res.exit_code == 0, res.output
-    assert (tmp_path / "runs" / "peg-insertion__baseline__round__none__1__embedded.json").exists()
+    assert (tmp_path / "runs" / "peg-insertion__recovery__round__none__1__embedded.json").exists()  # the default method
     spec = TrialSpec(task="t", method="m", variant="v", condition="c", seed=2,
                      reasoner=ReasonerSettings(backend="openai", model="qwen2.5vl:7b"))
     assert _record_path(spec) == Path("runs/t__m__v__c__2__openai-qwen2.5vl-7b.json")
@@ -224,11 +225,12 @@ def test_trial_log_lines_are_verbatim_unless_marked_up() -> None:
 
 
 def test_task_defaults_come_from_the_task():
+    """Without --method a task runs its system's own method (its `default_method`), not the reference one."""
     from kintsugi.campaign.plan import task_defaults
 
-    assert task_defaults("peg-insertion") == ("baseline", "round", ("none", "friction", "pose", "all"))
-    assert task_defaults("pour-single")[:2] == ("scripted", "default")
-    assert task_defaults("pick-box")[:2] == ("expert-fsm", "default")
+    assert task_defaults("peg-insertion") == ("recovery", "round", ("none", "friction", "pose", "all"))
+    assert task_defaults("pour-single")[:2] == ("agentchord", "default")
+    assert task_defaults("pick-box")[:2] == ("coral", "default")
 
 
 @pytest.mark.parametrize("task, method", [("pour-single", "baseline"), ("peg-insertion", "scripted"),
