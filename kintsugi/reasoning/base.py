@@ -67,12 +67,20 @@ class Reasoner(Protocol):
     `check` (the role's and the caller's checks, combined) must run on every reply before it is
     returned; a backend that can ask again (a model endpoint) sends its complaint back for one
     repair. Implementations raise `ReasoningError` (or a subclass) when they cannot give a valid
-    reply; they may expose `last_stats: CallStats | None` for accounting.
+    reply; they may expose `last_stats: CallStats | None` for accounting, and `sees_images = False`
+    when they never look at camera images (methods then leave them out of requests; see `sees_images`).
     """
 
     name: str
 
     def answer(self, role: "Role", request: BaseModel, check: Check | None = None) -> BaseModel: ...
+
+
+def sees_images(reasoner: Any) -> bool:
+    """Whether requests to this backend should carry camera images: a model looks at them, rules that
+    measure other observations (or replayed replies) do not. Backends say so with `sees_images`; True
+    when they do not say."""
+    return bool(getattr(reasoner, "sees_images", True))
 
 
 def describe_bytes(data: bytes) -> str:
@@ -119,6 +127,10 @@ class RecordingReasoner:
     @property
     def last_stats(self) -> CallStats | None:
         return getattr(self.inner, "last_stats", None)
+
+    @property
+    def sees_images(self) -> bool:
+        return sees_images(self.inner)
 
     def answer(self, role: "Role", request: BaseModel, check: Check | None = None) -> BaseModel:
         return self.record(role.name, lambda req: self.inner.answer(role, req, check), request)

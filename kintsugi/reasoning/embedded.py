@@ -20,6 +20,9 @@ class EmbeddedReasoner:
     """Answers with `role.embedded(request)`; deterministic, offline."""
 
     name = "embedded"
+    sees_images = False
+    """Optional camera images (a tabletop observation's) are left out of requests: the embedded answers read
+    the perceived features. Images a request type always carries (the peg's PNGs) are still sent."""
 
     def __init__(self) -> None:
         self.last_stats: CallStats | None = None

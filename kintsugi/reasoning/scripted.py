@@ -116,6 +116,8 @@ class ScriptedReasoner:
     """Answers from a list of replies (a file's, a record's) or a function; see the module docstring."""
 
     name = "scripted"
+    sees_images = False
+    """Replayed replies were written already: requests need not carry rendered camera images."""
 
     def __init__(self, replies: ReplyFunction | Iterable[Scripted | dict] | str | Path, where: str = "") -> None:
         self.last_stats: CallStats | None = None

@@ -86,7 +86,7 @@ class AgentChord:
         cfg = self.ctx.cfg
         steps_per_tick = max(1, round(cfg.sim.control_dt_s / cfg.sim.timestep_s))
         try:
-            first = robot.observation(images=self.ctx.reasoner.backend != "embedded")
+            first = robot.observation(images=reasoner.sees_images)
             compiled = compile_graph(reasoner, self.ctx.task, first, arranger=self.arranger, cfg=cfg)
             planning_calls = len(reasoner.records)
             keyframes = TabletopKeyframes(cfg)

@@ -53,7 +53,7 @@ class Replanning:
         verified sub-goal: a re-plan keeps them (the reasoner remembers what it did), the rest is re-observed."""
         self.reasoner = RecordingReasoner(make_reasoner(self.ctx.reasoner), records=[])
         cfg = self.ctx.cfg
-        self.images = self.ctx.reasoner.backend != "embedded"
+        self.images = self.reasoner.sees_images
         steps_per_tick = max(1, round(cfg.sim.control_dt_s / cfg.sim.timestep_s))
         keyframes = TabletopKeyframes(cfg)
         metrics = Metrics()

@@ -31,7 +31,7 @@ def compile_for_task(task: str, condition: str, seed: int, overrides: dict, sett
     world, _, _, _ = t.build(cfg, condition, seed)
     try:
         robot = TabletopRobot(world)
-        return compile_graph(reasoner, t.spec, robot.observation(images=settings.backend != "embedded"), cfg=cfg)
+        return compile_graph(reasoner, t.spec, robot.observation(images=reasoner.sees_images), cfg=cfg)
     finally:
         world.close()
 
