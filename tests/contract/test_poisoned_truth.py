@@ -15,11 +15,11 @@ import pytest
 
 import kintsugi.worlds.peg.task as task_module
 from kintsugi.core.plugins import load_builtins
-from kintsugi.core.registry import TASKS
 from kintsugi.worlds.peg.context import PegContext
 from kintsugi.worlds.peg.suites import suite_overrides
 from kintsugi.worlds.peg.world import PegWorld
 from kintsugi.core.record import TrialSpec
+from kintsugi.core.runner import run_trial
 
 load_builtins()
 
@@ -72,9 +72,8 @@ class PoisonedWorld(PegWorld):
 
 
 def _records(shape: str, seeds: range, overrides: dict | None = None) -> list[dict]:
-    task = TASKS.get("peg-insertion").factory()
-    return [task.run(TrialSpec(task="peg-insertion", method="recovery", variant=shape, condition="all", seed=s,
-                               overrides=overrides or {})).without_timings() for s in seeds]
+    return [run_trial(TrialSpec(task="peg-insertion", method="recovery", variant=shape, condition="all", seed=s,
+                                overrides=overrides or {})).without_timings() for s in seeds]
 
 
 def test_poison_raises_on_any_use() -> None:
@@ -90,6 +89,7 @@ def test_context_carries_no_seed_or_trial_parameters() -> None:
     assert names == {"cfg", "shape", "reasoner", "goals"}
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("shape", ["round", "square"])
 def test_recovery_records_are_identical_with_the_truth_poisoned(shape: str, monkeypatch: pytest.MonkeyPatch) -> None:
     seeds = range(3)
@@ -99,11 +99,12 @@ def test_recovery_records_are_identical_with_the_truth_poisoned(shape: str, monk
     assert [r["error"] for r in poisoned] == [None] * len(seeds)
     assert poisoned == normal
     # The trials exercised the whole loop, recoveries included, and were scored from the real truth.
-    assert sum(sum(r["extra_executions"].values()) for r in normal) > 0
+    assert sum(sum(r["method_figures"]["extra_executions"].values()) for r in normal) > 0
     assert {c["role"] for r in normal for c in r["transcript"]} == {"judge", "analyze", "plan"}
     assert all(r["params"]["shape"] == shape and "tip_depth_mm" in r["params"] for r in poisoned)
 
 
+@pytest.mark.slow
 def test_stretch_options_never_read_the_truth(monkeypatch: pytest.MonkeyPatch) -> None:
     """Re-approach (which re-locates the hole from the approach image) and the side camera, in the stretch
     world: identical records with the truth poisoned, and the re-approach path was exercised."""

@@ -16,10 +16,10 @@ import sys
 import pytest
 
 from kintsugi.core.plugins import load_builtins
-
-from kintsugi.core.registry import TASKS
-from kintsugi.worlds.tabletop.world import TabletopWorld
 from kintsugi.core.record import TrialSpec
+from kintsugi.core.registry import TASKS
+from kintsugi.core.runner import run_trial
+from kintsugi.worlds.tabletop.world import TabletopWorld
 
 load_builtins()
 
@@ -53,7 +53,7 @@ def _guarded(real):  # noqa: ANN001, ANN202
 def _record(method: str, seed: int) -> dict:
     spec = TrialSpec(task="pour-single", method=method, variant="default", condition="drop", seed=seed,
                      overrides={"disturbance.drop_p": 0.1})
-    return TASKS.get("pour-single").factory().run(spec).without_timings()
+    return run_trial(spec).without_timings()
 
 
 def test_the_guard_catches_a_method_side_read(monkeypatch: pytest.MonkeyPatch) -> None:
@@ -67,6 +67,7 @@ def test_the_guard_catches_a_method_side_read(monkeypatch: pytest.MonkeyPatch) -
     assert world.ground_truth() is not None  # the test module itself is environment-side
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("method", ["agentchord", "inner-monologue"])
 def test_records_are_identical_with_the_truth_poisoned_for_the_method_side(
         method: str, monkeypatch: pytest.MonkeyPatch) -> None:
