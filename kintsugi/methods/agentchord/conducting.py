@@ -56,6 +56,7 @@ def moves_an_arm(edge: Edge) -> bool:
 
 
 def guard_objects(graph: TaskGraph, node: str) -> set[str]:
+    """The objects the guards of the edges out of `node` read."""
     return {e for x in graph.out_edges(node) for c in x.guard for e, role, _ in c.refs() if role != "arm"}
 
 
