@@ -39,10 +39,7 @@ DEFAULT_OPENAI_MODEL = "gpt-4o"
 """The model the paper used; only a default when talking to OpenAI itself."""
 PLACEHOLDER_KEY = "sk-local-no-key"
 """Local servers ignore the key, but the SDK insists on one."""
-IMAGE_LABELS = {
-    "outcome.image_png": "terminal camera image at the end of the skill",
-    "goal_image_png": "goal image: this skill's terminal image in the default condition (what success looks like)",
-}
+
 
 def _is_openai(base_url: str | None) -> bool:
     return base_url is None or (urlparse(base_url).hostname or "").endswith(OPENAI_HOST)
@@ -119,7 +116,7 @@ class OpenAIReasoner:
             return text
         parts: list[dict[str, Any]] = [{"type": "text", "text": text}]
         for i, (path, data) in enumerate(images, 1):
-            parts.append({"type": "text", "text": f"Image {i} ({path}): {IMAGE_LABELS.get(path, path)}"})
+            parts.append({"type": "text", "text": f"Image {i} ({path}): {role.image_labels.get(path, path)}"})
             url = "data:image/png;base64," + base64.b64encode(data).decode("ascii")
             parts.append({"type": "image_url", "image_url": {"url": url}})
         return parts

@@ -17,7 +17,7 @@ the role's name, failed calls included.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from functools import lru_cache
 from importlib import resources
 from typing import Any, Callable, Iterator
@@ -68,6 +68,8 @@ class Role:
     """Extra markdown for the user message, written from the request (e.g. the peg robot's description)."""
     tools: Callable[[Any], ToolRoute] | None = None
     """For replies a model endpoint should give as function calls: the tools for this request."""
+    image_labels: dict[str, str] = field(default_factory=dict)
+    """What each image of the request shows, by its dotted path (`outcome.image_png`), told to a model."""
 
     @property
     def prompt_file(self) -> str:

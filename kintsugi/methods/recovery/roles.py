@@ -26,6 +26,11 @@ from kintsugi.methods.recovery.validation import validate_analysis, validate_pla
 from kintsugi.reasoning.roles import ROLES, Role, ToolRoute
 
 PACKAGE = "kintsugi.methods.recovery"
+IMAGE_LABELS = {
+    "outcome.image_png": "terminal camera image at the end of the skill",
+    "goal_image_png": "goal image: this skill's terminal image in the default condition (what success looks like)",
+}
+"""What the images of a judge or analyze request show, told to a model with each image."""
 PLAN_TEXT_HINT = ('Write each function call as one step {"skill": <function name>, "goal": {<its arguments>}}, '
                   'in execution order, inside {"steps": [...]}.')
 
@@ -69,7 +74,7 @@ def check_plan(reply: PlanReply, request: PlanRequest) -> PlanReply:
 
 def _role(name: str, request: Any, reply: Any, solver: Any, **kw: Any) -> Role:
     return ROLES.register(Role(name=name, request=request, reply=reply, package=PACKAGE, embedded=solver,
-                               sections=robot_section, **kw))
+                               sections=robot_section, image_labels=IMAGE_LABELS, **kw))
 
 
 JUDGE = _role("judge", JudgeRequest, JudgeReply, embedded.judge)
