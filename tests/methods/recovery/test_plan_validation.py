@@ -137,6 +137,7 @@ def assert_within_limits(result: ValidatedPlan, req: PlanRequest) -> None:
         assert all(getattr(s.pose, a) == getattr(current, a) for a in untouched)
 
 
+@pytest.mark.slow
 @settings(max_examples=1000, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(raw=raw_replies, mode=st.integers(0, 2), req=requests())
 def test_hostile_replies_are_rejected_or_safe(raw: object, mode: int, req: PlanRequest) -> None:
@@ -162,6 +163,7 @@ numeric_step = st.sampled_from(["fit", "align", "insert"]).flatmap(
 )
 
 
+@pytest.mark.slow
 @settings(max_examples=1000, deadline=None)
 @given(raw=st.lists(numeric_step, min_size=1, max_size=MAX_PLAN_STEPS), as_text=st.booleans(), req=requests())
 def test_numeric_replies_are_always_clamped_into_limits(raw: list, as_text: bool, req: PlanRequest) -> None:

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import pytest
+
 from kintsugi.methods.agentchord.method import metrics_of
 from kintsugi.methods.agentchord.recovery_watch import LOSS_WINDOW, LossWatch, held_in_failure, named
 from kintsugi.taskgraph.model import TaskGraph
@@ -80,6 +82,7 @@ def test_what_a_recovery_holds_is_read_from_the_failed_check_and_its_actions() -
     assert named(g.edge("take")) == {"tray"}
 
 
+@pytest.mark.slow
 def test_pour_single_seed_40_a_drop_during_the_recovery_is_seen() -> None:
     """The bottle is dropped again while the recovery tilts it to pour: no action of that edge names it, and
     the sub-goal before it does not say it is held, but the failed edge's drop check watched it."""
@@ -91,6 +94,7 @@ def test_pour_single_seed_40_a_drop_during_the_recovery_is_seen() -> None:
     assert metrics_of(r).episode_steps < 3000
 
 
+@pytest.mark.slow
 def test_coffee_tray_seed_70_recovers_the_capsule_from_the_tray() -> None:
     r = run_trial(TrialSpec(task="coffee-tray", method="agentchord", variant="default", condition="drop", seed=70,
                             overrides={"disturbance.drop_p": 0.1}))

@@ -3,11 +3,14 @@ no window: the recovery's own loss watch judged them with Eq. 12's window, as th
 
 from __future__ import annotations
 
+import pytest
+
 from kintsugi.methods.agentchord.method import metrics_of
 from kintsugi.core.record import TrialSpec
 from kintsugi.core.runner import run_trial
 
 
+@pytest.mark.slow
 def test_a_hand_that_lets_go_as_the_tray_lands_does_not_rerun_the_recovery() -> None:
     """Coffee-tray seed 13 at drop p 0.10: the tray falls from both hands during the carry; the branch takes it
     again and carries it on, and as it is set down the left pads slide off its rim in the last control steps.
