@@ -52,8 +52,11 @@ class CoralFigures(Figures):
     variant: str
     priors: dict[str, dict[str, Any]] = {}
     plan_from: str | None = None
-    """`formulation` or `memory`."""
+    """`formulation`, or `memory episode <id>` when a remembered plan replaced the formulation."""
     memory: dict[str, Any] | None = None
+    """How many episodes the memory held and the best one's similarity score."""
+    memory_beliefs: dict[str, dict[str, float]] | None = None
+    """The beliefs carried over from the remembered episode."""
     attempts: list[dict[str, Any]] = []
 
 
