@@ -123,7 +123,7 @@ def grip_sweep(forces: list[float], trials: int) -> None:
             r = run_trial(TrialSpec(task="fold-towel", method="scripted", variant="default", condition="pose",
                                     seed=seed, overrides={"robot.grip_force_n": force}))
             folded += r.success
-            released += bool(r.details.get("released"))
+            released += bool(r.task_figures.get("released"))
         print(f"grip {force:g} N: {folded}/{trials} folded, {released}/{trials} released (perceived corners, pose)")
 
 

@@ -22,6 +22,7 @@ from kintsugi.worlds.peg.skills import execute_skill
 from kintsugi.worlds.peg.world import PegWorld, TrialParams
 from kintsugi.core.record import TrialSpec
 from kintsugi.core.runner import run_trial
+from tests.sim_checks import assert_no_warnings
 
 load_builtins()  # run_trial looks the task up in the registry
 
@@ -48,12 +49,6 @@ def _hold(world: PegWorld, pose: tuple[float, float, float], seconds: float) -> 
     world.step(round(seconds / world.model.opt.timestep))
 
 
-def _no_warnings(world: PegWorld) -> None:
-    counts = {mujoco.mjtWarning(i).name: world.data.warning[i].number for i in range(mujoco.mjtWarning.mjNWARNING)}
-    assert not any(counts.values()), counts
-    assert np.all(np.isfinite(world.data.qpos)) and np.all(np.isfinite(world.data.qvel))
-
-
 # --- springs -------------------------------------------------------------
 
 @pytest.mark.parametrize("force", [10.0, -10.0, 4.0])
@@ -68,7 +63,7 @@ def test_z_spring_static_deflection_is_force_over_stiffness(force: float) -> Non
     assert world.wrist_compression() == pytest.approx(expected, rel=0.05)
     # The robot-side force sensor reports the same force.
     assert world.wrist_compression() * CFG.wrist.z_stiffness == pytest.approx(force, rel=0.05)
-    _no_warnings(world)
+    assert_no_warnings(world)
 
 
 @pytest.mark.parametrize("torque", [0.05, -0.03])
@@ -83,7 +78,7 @@ def test_roll_spring_static_deflection_is_torque_over_stiffness(torque: float) -
     roll = world.wrist_deflection()[1]
     assert roll == pytest.approx(torque / CFG.wrist.roll_stiffness, rel=0.05)
     assert abs(world.wrist_deflection()[2]) < 1e-4 and abs(world.wrist_deflection()[3]) < 1e-4
-    _no_warnings(world)
+    assert_no_warnings(world)
 
 
 def test_roll_spring_with_gravity_adds_pendulum_stiffness() -> None:
@@ -122,7 +117,7 @@ def test_peg_pressed_with_20N_on_the_board_does_not_sink(shape: str) -> None:
     # sim.contact_timeconst_s = 0.01, 1 mm only at ~0.05).
     assert _tip_z(world) > -0.1e-3
     assert _tip_z(world) < 1e-3, "the peg should be resting on the surface"
-    _no_warnings(world)
+    assert_no_warnings(world)
 
 
 @pytest.mark.parametrize("shape", SHAPES)
@@ -145,7 +140,7 @@ def test_peg_cannot_pass_through_the_board_and_the_limit_halts_at_once(shape: st
     descent = (0.16 - result.terminal[1]) / (CFG.control.speed_mm_s * MM)
     assert result.sim_time == pytest.approx(descent, abs=2 / CFG.control.rate_hz)
     assert _tip_z(world) > -1e-3
-    _no_warnings(world)
+    assert_no_warnings(world)
 
 
 # --- hole geometry -------------------------------------------------------
@@ -193,7 +188,7 @@ def test_upright_peg_over_the_hole_centre_goes_in(shape: str) -> None:
     truth = world.ground_truth()
     assert result.reached and not result.compression_limit
     assert truth.success and truth.tip_depth_mm == pytest.approx(25.0, abs=1.0)
-    _no_warnings(world)
+    assert_no_warnings(world)
 
 
 @pytest.mark.parametrize("shape", SHAPES)
@@ -208,7 +203,7 @@ def test_peg_offset_5mm_cannot_go_in(shape: str, offset_mm: float) -> None:
     truth = world.ground_truth()
     assert result.compression_limit
     assert not truth.success and truth.tip_depth_mm < 1.0
-    _no_warnings(world)
+    assert_no_warnings(world)
 
 
 @pytest.mark.parametrize("shape", ["round", "rectangle"])
@@ -317,7 +312,7 @@ def test_jammed_tilted_peg_is_not_a_success(shape: str, hole_y: float, angle: fl
     assert truth.tilt_deg > truth.max_tilt_deg + 1.0
     assert (truth.tip_depth_mm < truth.min_depth_mm) is shallow
     assert not truth.success
-    _no_warnings(world)
+    assert_no_warnings(world)
 
 
 # --- conditions ----------------------------------------------------------

@@ -15,6 +15,7 @@ from kintsugi.worlds.tabletop.fold_towel import ARM_CORNERS, script
 from kintsugi.worlds.tabletop.robot import TabletopRobot
 from kintsugi.worlds.tabletop.task import expand
 from kintsugi.worlds.tabletop.world import TabletopWorld
+from tests.sim_checks import assert_no_warnings
 
 load_builtins()
 GRASP_STEPS = 3
@@ -44,12 +45,6 @@ def _grasped(overrides: dict | None = None, condition: str = "none", seed: int =
 def _lift(robot: TabletopRobot, dz: float = 0.08) -> None:
     robot.execute({"action": "drive", **{a: {"action": "move_by_offset", "arm": a, "dxyz": (0.0, 0.0, dz)}
                                          for a in ARM_CORNERS}})
-
-
-def _no_warnings(world: TabletopWorld) -> None:
-    counts = {i: int(w.number) for i, w in enumerate(world.data.warning) if w.number}
-    assert not counts, counts
-    assert np.isfinite(world.data.qpos).all() and np.isfinite(world.data.qvel).all()
 
 
 def test_mesh_puts_every_corner_on_its_quads_diagonal() -> None:
@@ -134,7 +129,7 @@ def test_pinch_lifts_both_corners_by_friction(lifted: dict) -> None:
     assert lifted["touch"] == {"left": 2, "right": 2}
     assert all(z > 0.06 for z in lifted["lift_z"].values()), lifted["lift_z"]
     assert all(TOWEL in objs for objs in lifted["held"].values())
-    _no_warnings(lifted["world"])
+    assert_no_warnings(lifted["world"])
 
 
 @pytest.mark.slow
@@ -187,5 +182,5 @@ def test_scripted_fold_with_perceived_corners_folds_and_lets_go() -> None:
     ok, d = scorer.finish(world)
     assert ok and d.released and d.at_rest, d
     assert max(d.corner_dist_xy_m.values()) < 0.005, d
-    _no_warnings(world)
+    assert_no_warnings(world)
     world.close()

@@ -11,6 +11,7 @@ from kintsugi.worlds.tabletop.config import TabletopConfig
 from kintsugi.worlds.tabletop.disturbances import Disturbances, KnockDisturbance, ShiftDisturbance
 from kintsugi.worlds.tabletop.robot import TabletopRobot
 from kintsugi.worlds.tabletop.world import StartPose, TabletopWorld
+from tests.sim_checks import assert_no_warnings
 
 LAYOUT = {"bottle": StartPose(x=0.40, y=-0.25), "cup": StartPose(x=0.46, y=0.0),
           "capsule": StartPose(x=0.38, y=0.22)}
@@ -23,11 +24,6 @@ def _world(objects: tuple[str, ...]) -> TabletopWorld:
 def _settle(world: TabletopWorld, seconds: float) -> None:
     for _ in range(round(seconds / world.cfg.sim.control_dt_s)):
         world.tick()
-
-
-def _no_warnings(world: TabletopWorld) -> None:
-    assert not any(w.number for w in world.data.warning)
-    assert np.isfinite(world.data.qpos).all()
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2])
@@ -45,7 +41,7 @@ def test_shift_slides_the_cup_by_the_drawn_distance(seed: int) -> None:
     assert moved == pytest.approx(shift.distance, abs=0.004)
     assert end.tilt_deg < 2.0 and end.speed_m_s < 0.01  # slid, not tipped or flung
     assert shift.events and "cup slid" in shift.events[0][1]
-    _no_warnings(world)
+    assert_no_warnings(world)
     world.close()
 
 
@@ -62,7 +58,7 @@ def test_knock_tips_a_standing_object_over(obj: str, others: tuple[str, ...]) ->
     assert fallen.speed_m_s < 0.05
     assert knock.events and "knocked" in knock.events[0][1]
     assert not world.data.xfrc_applied.any()  # the push ended
-    _no_warnings(world)
+    assert_no_warnings(world)
     world.close()
 
 

@@ -13,6 +13,7 @@ from kintsugi.worlds.tabletop.conditions import DropDisturbance
 from kintsugi.worlds.tabletop.config import TabletopConfig
 from kintsugi.worlds.tabletop.robot import TabletopRobot
 from kintsugi.worlds.tabletop.world import StartPose, TabletopWorld
+from tests.sim_checks import assert_no_warnings
 
 START = {"bottle": StartPose(x=0.40, y=-0.25)}
 GRASP = {"action": "grasp", "arm": "right", "obj": "bottle"}
@@ -31,12 +32,6 @@ def _in_hand(world: TabletopWorld) -> tuple[np.ndarray, np.ndarray]:
     pos, rot = world.tcp_pose("right")
     b = world.bodies["bottle"]
     return rot.T @ (world.data.xpos[b] - pos), rot.T @ world.data.xmat[b].reshape(3, 3)[:, 2]
-
-
-def _no_warnings(world: TabletopWorld) -> None:
-    counts = {i: int(w.number) for i, w in enumerate(world.data.warning) if w.number}
-    assert not counts, counts
-    assert np.isfinite(world.data.qpos).all() and np.isfinite(world.data.qvel).all()
 
 
 @pytest.fixture(scope="module")
@@ -77,7 +72,7 @@ def test_held_bottle_survives_a_90_degree_pour(poured: dict) -> None:
     assert np.linalg.norm(poured["pour_slip"]) < 0.003, poured["pour_slip"]
     assert poured["pour_axis_deg"] < 2.0  # the bottle's axis did not turn in the fingers
     assert poured["held"] == ["bottle"]
-    _no_warnings(poured["world"])
+    assert_no_warnings(poured["world"])
 
 
 def test_too_weak_a_grasp_slips() -> None:
@@ -90,7 +85,7 @@ def test_too_weak_a_grasp_slips() -> None:
     robot.execute(LIFT)
     assert world.data.xpos[world.bodies["bottle"]][2] - z0 < 0.02
     assert world.ground_truth().held["right"] == []
-    _no_warnings(world)
+    assert_no_warnings(world)
     world.close()
 
 
@@ -109,7 +104,7 @@ def test_drop_disturbance_drops_the_held_bottle() -> None:
     assert truth.held["right"] == []
     assert truth.objects["bottle"].pos[2] < 0.11  # back on the table (standing or fallen)
     assert robot.observation(images=False).arms["right"].gripper_closed  # the robot still thinks it holds it
-    _no_warnings(world)
+    assert_no_warnings(world)
     world.close()
 
 
