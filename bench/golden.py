@@ -18,8 +18,6 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 GOLDEN = Path(__file__).resolve().parents[1] / "tests" / "data" / "golden" / "records.jsonl"
-TIMING_KEYS = ("_ms_per_step", "latency_s", "wall_time")
-"""Wall-clock figures inside a record's sections: they differ between runs by design."""
 
 
 def _run(spec: dict) -> dict:
@@ -46,8 +44,8 @@ def differences(old: object, new: object, where: str = "") -> list[str]:
     if isinstance(old, dict) and isinstance(new, dict):
         out = []
         for k in sorted(set(old) | set(new)):
-            if k.endswith(TIMING_KEYS) or old.get(k) is None and new.get(k) is None:
-                continue  # wall-clock figures; a missing optional field and a null one are the same
+            if old.get(k) is None and new.get(k) is None:
+                continue  # a missing optional field and a null one are the same
             out += differences(old.get(k, "<missing>"), new.get(k, "<missing>"), f"{where}.{k}" if where else k)
         return out
     if isinstance(old, list) and isinstance(new, list):

@@ -153,8 +153,23 @@ class TrialRecord(StrictModel):
         return data
 
     def without_timings(self) -> dict[str, Any]:
-        """The record minus wall-clock fields: equal for equal seeds."""
+        """The record minus wall-clock fields (and figures named `*_ms_per_step`, `*_wall_s`): equal for
+        equal seeds."""
         data = self.model_dump(mode="json", exclude={"wall_time", "reasoning_latency_s"})
         for call in data["transcript"]:
             call.pop("latency_s", None)
+        for slot in ("task_figures", "method_figures"):
+            data[slot] = _without_wall_clock(data[slot])
         return data
+
+
+WALL_CLOCK_SUFFIXES = ("_ms_per_step", "_wall_s")
+"""Figures whose names end so are measured on the wall clock: they differ between equal trials."""
+
+
+def _without_wall_clock(value: Any) -> Any:
+    if isinstance(value, dict):
+        return {k: _without_wall_clock(v) for k, v in value.items() if not k.endswith(WALL_CLOCK_SUFFIXES)}
+    if isinstance(value, list):
+        return [_without_wall_clock(v) for v in value]
+    return value

@@ -38,8 +38,16 @@ def test_a_golden_trial_replays_record_for_record(line: str) -> None:
     assert golden.differences(old, new) == []
 
 
-def test_differences_sees_a_changed_field_and_ignores_wall_clock() -> None:
-    a = {"success": True, "method_figures": {"code_ms_per_step": 1.0, "x": [1, 2]}, "opt": None}
-    assert golden.differences(a, {"success": True, "method_figures": {"code_ms_per_step": 9.0, "x": [1, 2]}}) == []
+def test_differences_sees_a_changed_field_and_takes_null_for_missing() -> None:
+    a = {"success": True, "method_figures": {"x": [1, 2]}, "opt": None}
+    assert golden.differences(a, {"success": True, "method_figures": {"x": [1, 2]}}) == []
     assert golden.differences(a, {"success": False, "method_figures": {"x": [1, 3]}, "opt": None}) == [
         "method_figures.x[1]: 2 -> 3", "success: True -> False"]
+
+
+def test_without_timings_drops_wall_clock_figures() -> None:
+    from kintsugi.core.record import TrialRecord
+
+    r = TrialRecord(key="t/m/v/c/0", task="t", method="m", variant="v", condition="c", seed=0,
+                    method_figures={"attempts": [{"code_ms_per_step": 2.5, "reached": True}], "plan_wall_s": 1.0})
+    assert r.without_timings()["method_figures"] == {"attempts": [{"reached": True}]}

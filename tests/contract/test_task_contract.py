@@ -34,8 +34,6 @@ TASK_NAMES = [e.name for e in TASKS if "test" not in e.tags]
 (tests.fake_tasks' coin flips, registered when another test imports them) have no world to check."""
 CASES = [(name, v) for name in TASK_NAMES for v in TASKS.get(name).factory().default_variants]
 STATE = ("qpos", "qvel", "qacc", "act", "sensordata")
-WALL_CLOCK = ("_ms_per_step",)
-"""Method figures measured in wall-clock time (CoRAL's cost code and planner per control step)."""
 
 
 def _spec(task: str, variant: str, seed: int = 0, condition: str = "all", **kw: Any) -> TrialSpec:
@@ -45,15 +43,8 @@ def _spec(task: str, variant: str, seed: int = 0, condition: str = "all", **kw: 
 
 
 def _untimed(record: TrialRecord) -> dict[str, Any]:
-    """The record minus wall-clock measurements: its timings and a method's own (`*_ms_per_step`)."""
-    def strip(value: Any) -> Any:
-        if isinstance(value, dict):
-            return {k: strip(v) for k, v in value.items() if not k.endswith(WALL_CLOCK)}
-        if isinstance(value, list):
-            return [strip(v) for v in value]
-        return value
-
-    return strip(record.without_timings())
+    """The record minus wall-clock measurements (its timings and figures such as `*_ms_per_step`)."""
+    return record.without_timings()
 
 
 def _floats(value: Any) -> list[float]:
