@@ -22,6 +22,7 @@ BUILTIN_MODULES = (
     "kintsugi.worlds.tabletop.tasks",
     "kintsugi.worlds.contact.tasks",
     "kintsugi.methods.builtin",
+    "kintsugi.reasoning.builtin",
 )
 ENTRY_POINT_GROUP = "kintsugi.plugins"
 _loaded: set[str] = set()

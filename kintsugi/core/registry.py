@@ -71,3 +71,6 @@ TASKS: Registry[Callable[[], Any]] = Registry("task")
 """Task name -> factory() returning a `kintsugi.core.task.Task`."""
 METHODS: Registry[Callable[[Any, Any], Any]] = Registry("method")
 """Method name -> factory(context, settings) returning an object with `run(robot, log) -> bool`."""
+REASONERS: Registry[Callable[[Any, Any], Any]] = Registry("reasoner")
+"""Reasoner backend name -> factory(ReasonerSettings, options) returning a `kintsugi.reasoning.base.Reasoner`;
+the entry's config validates `ReasonerSettings.options`."""

@@ -13,11 +13,14 @@ import time
 import traceback
 from typing import Any, Callable
 
+from pydantic import ValidationError
+
+from kintsugi.core.config import apply_overrides
 from kintsugi.core.errors import ConfigError, KintsugiError
 from kintsugi.core.log import TrialLog
 from kintsugi.core.plugins import load_builtins
-from kintsugi.core.record import Event, TrialRecord, TrialSpec
-from kintsugi.core.registry import METHODS, TASKS
+from kintsugi.core.record import Event, ReasonerSettings, TrialRecord, TrialSpec
+from kintsugi.core.registry import METHODS, REASONERS, TASKS
 
 Echo = Callable[[str], None]
 Attach = Callable[[Any, TrialLog], None]
@@ -25,7 +28,7 @@ Attach = Callable[[Any, TrialLog], None]
 
 def split_overrides(overrides: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
     """(task, method, reasoner) overrides: `method.<key>` go to the method's config, `reasoner.<key>` to the
-    reasoner settings (`reasoning.reasoner_settings`), every other key to the task's."""
+    reasoner settings (`reasoner_settings`), every other key to the task's."""
     method = {k.split(".", 1)[1]: v for k, v in overrides.items() if k.startswith("method.")}
     reasoner = {k.split(".", 1)[1]: v for k, v in overrides.items() if k.startswith("reasoner.")}
     task = {k: v for k, v in overrides.items() if not k.startswith(("method.", "reasoner."))}
@@ -35,8 +38,6 @@ def split_overrides(overrides: dict[str, Any]) -> tuple[dict[str, Any], dict[str
 def resolve(spec: TrialSpec) -> tuple[Any, Any, Any, Any, Any]:
     """(task, method entry, task config, method config, reasoner settings) for a spec; ConfigError names
     what is wrong."""
-    from kintsugi.reasoning import reasoner_settings
-
     load_builtins()
     task = TASKS.get(spec.task).factory()
     entry = METHODS.get(spec.method)
@@ -48,6 +49,45 @@ def resolve(spec: TrialSpec) -> tuple[Any, Any, Any, Any, Any]:
     cfg = task.config(task_overrides)
     task.check_variant(spec.variant, cfg)
     return task, entry, cfg, entry.configure(method_overrides), reasoner_settings(spec.reasoner, reasoner_overrides)
+
+
+def backend_options(entry: Any, options: dict[str, Any]) -> Any:
+    """A reasoner backend's `options` validated by its settings class; ConfigError names
+    `reasoner.options.<key>`."""
+    try:
+        return entry.config.model_validate(dict(options))
+    except ValidationError as exc:
+        known = ", ".join(entry.config.model_fields) or "none"
+        problems = []
+        for err in exc.errors(include_url=False, include_input=False):
+            key = ".".join(["reasoner.options", *(str(p) for p in err["loc"])])
+            if err["type"] == "extra_forbidden":
+                problems.append(f"unknown key {key!r} (the {entry.name} backend's options: {known})")
+            else:
+                problems.append(f"{key}: {err['msg']}")
+        raise ConfigError(f"bad reasoner option: {'; '.join(problems)}") from None
+
+
+def reasoner_settings(settings: ReasonerSettings, overrides: dict[str, Any]) -> ReasonerSettings:
+    """`settings` with `reasoner.*` overrides applied (keys without the prefix: `model`, `options.replies`),
+    checked: the backend must be registered and its options pass its settings class. Errors are one
+    line naming the key."""
+    options = dict(settings.options)
+    common: dict[str, Any] = {}
+    for key, value in overrides.items():
+        if key == "options":
+            if not isinstance(value, dict):
+                raise ConfigError(f"reasoner.options must be a JSON object of the backend's options, not {value!r}")
+            options |= value
+        elif key.startswith("options."):
+            options[key.removeprefix("options.")] = value
+        else:
+            common[key] = value
+    out = apply_overrides(settings, common, prefix="reasoner") if common else settings
+    out = out.model_copy(update={"options": options})
+    load_builtins()
+    backend_options(REASONERS.get(out.backend), options)
+    return out
 
 
 def run_trial(spec: TrialSpec, echo: Echo | None = None, attach: Attach | None = None) -> TrialRecord:
@@ -119,4 +159,5 @@ def _record(spec: TrialSpec, episode: Any, log: TrialLog, success: bool, verdict
     )
 
 
-__all__ = ["Event", "failed_record", "resolve", "run_trial", "split_overrides"]
+__all__ = ["Event", "backend_options", "failed_record", "reasoner_settings", "resolve", "run_trial",
+           "split_overrides"]

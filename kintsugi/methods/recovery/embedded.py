@@ -9,8 +9,11 @@ would apply looking at the picture. It never touches the simulator.
 Every robot-specific number comes from the request's `RobotDescription` (the
 robot's own build config and vision settings): the lever that turns a base
 shift into a tilt, the contact press a sunk tip relieves, the hole clearance
-and the check tolerances. The constants below are the rules' own
-proportions, the same for any robot.
+and the check tolerances; the rules' own proportions (in `seeing`) are the
+same for any robot.
+
+This module holds the judge (`judge`); `diagnosis` holds analyze and plan,
+`seeing` the image measurements they share. `roles` registers all three.
 """
 
 from __future__ import annotations
