@@ -190,9 +190,10 @@ def test_malformed_json_is_repaired_once(fake_openai: FakeOpenAIServer) -> None:
 
 def test_malformed_twice_raises(fake_openai: FakeOpenAIServer) -> None:
     fake_openai.push(content("I think it worked!"), content("still not json"))
-    with pytest.raises(ReasoningError, match="no usable reply in 2 attempts"):
+    with pytest.raises(ReasoningError, match="no usable reply in 2 attempts") as err:
         ask(reasoner(fake_openai), "judge", judge_request())
     assert len(fake_openai.requests) == 2
+    assert "check the prompt in kintsugi/methods/recovery/prompts/judge.md" in str(err.value)
 
 
 def test_refusal_is_reported_and_repaired(fake_openai: FakeOpenAIServer) -> None:

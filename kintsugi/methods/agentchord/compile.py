@@ -19,7 +19,7 @@ from kintsugi.methods.agentchord.symbolic import PlanningError
 from kintsugi.methods.agentchord.types import ArrangerReply, ArrangerRequest, ComposerReply, ComposerRequest
 from kintsugi.taskgraph.augment import RecoveryProposal, augment
 from kintsugi.taskgraph.forward import FilterResult, forward_filter
-from kintsugi.methods.recovery.validation import describe_validation_error
+from kintsugi.reasoning.jsontext import describe_validation_error
 from kintsugi.taskgraph.model import TaskGraph
 
 
