@@ -20,7 +20,7 @@ from pydantic import ValidationError
 
 from kintsugi.core.config import StrictModel
 from kintsugi.core.errors import ReasoningError
-from kintsugi.reasoning.jsontext import describe_validation_error  # noqa: F401 - re-exported
+from kintsugi.reasoning.jsontext import describe_validation_error
 from kintsugi.methods.recovery.types import AnalyzeReply, AnalyzeRequest, PlanReply, PlanRequest, RecoverySkill
 from kintsugi.perception.types import Axis, Pose
 
