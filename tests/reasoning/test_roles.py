@@ -13,6 +13,7 @@ from kintsugi.reasoning import make_reasoner
 from kintsugi.reasoning.base import RecordingReasoner
 from kintsugi.reasoning.embedded import EmbeddedReasoner
 from kintsugi.reasoning.roles import ROLES, Role, ask
+from tests.fake_openai_server import fake_openai  # noqa: F401 - fixture
 from tests.reasoning.roles_fixtures import ECHO, EchoReply, EchoRequest
 
 
@@ -112,3 +113,18 @@ def test_reasoning_perception_and_worlds_import_no_method() -> None:
         for path in (root / layer).rglob("*.py"):
             text = path.read_text(encoding="utf-8")
             assert "import kintsugi.methods" not in text and "from kintsugi.methods" not in text, path
+
+
+def test_a_new_role_reaches_a_model_with_its_own_prompts_and_check(fake_openai) -> None:  # noqa: ANN001
+    from kintsugi.reasoning.openai_backend import OpenAIReasoner
+    from tests.fake_openai_server import content
+
+    fake_openai.push(content({"echo": "zz"}), content({"echo": "aa"}))  # the first fails the role's check
+    model = RecordingReasoner(OpenAIReasoner(model="m", base_url=fake_openai.base_url, timeout_s=5, max_retries=0,
+                                             api_key_env="KINTSUGI_TEST_NO_SUCH_KEY"))
+    assert ask(model, "test-echo", EchoRequest(text="a", times=2)) == EchoReply(echo="aa")
+    first, repair = fake_openai.requests
+    assert first["messages"][0] == {"role": "system", "content": ECHO.system_text()}
+    assert first["messages"][1]["content"].startswith(ECHO.prompt_text())
+    assert "must repeat 'a'" in repair["messages"][-1]["content"]
+    assert model.records[0].attempts == 2 and model.records[0].backend == "openai"
