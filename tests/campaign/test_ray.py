@@ -12,6 +12,8 @@ import pytest
 
 ray = pytest.importorskip("ray", reason="Ray is not installed (pip install 'kintsugi[ray]'; `make test` installs it)")
 
+pytestmark = pytest.mark.slow  # a local Ray takes seconds to start
+
 from kintsugi.campaign.plan import CampaignConfig, build_config, expand  # noqa: E402
 from kintsugi.campaign.runner import run_campaign  # noqa: E402
 
