@@ -85,24 +85,21 @@ def validate(cfg: CampaignConfig) -> None:
     """Check every name and setting a campaign uses, so a typo fails before the first trial, not in every one.
 
     In order: task and plugins, methods (each must drive the task's robot), `--set` overrides
-    against the task's typed config and `method.*` ones against each method's, variants,
+    against the task's typed config and `method.*` / `methods.<name>.*` ones against each method's, variants,
     conditions, the reasoner backend and its settings (building it checks e.g. that the openai
     backend has a key or a base URL).
     """
     from kintsugi.campaign.bootstrap import bootstrap
-    from kintsugi.core.registry import METHODS, TASKS
-    from kintsugi.core.runner import split_overrides
-    from kintsugi.reasoning import make_reasoner, reasoner_settings
+    from kintsugi.core.registry import TASKS
+    from kintsugi.core.resolve import check_scoped, method_for, reasoner_settings, split_overrides
+    from kintsugi.reasoning import make_reasoner
 
     bootstrap(cfg.plugins, cfg.task)
     task = TASKS.get(cfg.task).factory()
-    task_overrides, method_overrides, reasoner_overrides = split_overrides(cfg.overrides)
+    check_scoped(cfg.overrides, cfg.methods)
     for name in cfg.methods:
-        entry = METHODS.get(name)
-        if task.method_tag not in entry.tags:
-            fits = ", ".join(e.name for e in METHODS if task.method_tag in e.tags) or "(none)"
-            raise ConfigError(f"method {name!r} does not run task {cfg.task!r}; methods that do: {fits}")
-        entry.configure(method_overrides)
+        method_for(task, name).configure(split_overrides(cfg.overrides, name)[1])
+    task_overrides, _, reasoner_overrides = split_overrides(cfg.overrides)
     config = task.config(task_overrides)
     for name in cfg.variants:
         task.check_variant(name, config)

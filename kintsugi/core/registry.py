@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Generic, Iterator, TypeVar
 
 from kintsugi.core.config import StrictModel, apply_overrides
-from kintsugi.core.errors import UnknownNameError
+from kintsugi.core.errors import ConfigError, UnknownNameError
 
 T = TypeVar("T")
 
@@ -30,7 +30,10 @@ class Entry(Generic[T]):
 
     def configure(self, overrides: dict[str, Any] | list[str], prefix: str = "method") -> StrictModel:
         """The entry's settings with dotted overrides applied (errors name `<prefix>.<key>`)."""
-        return apply_overrides(self.config(), overrides, prefix=prefix)
+        try:
+            return apply_overrides(self.config(), overrides, prefix=prefix)
+        except ConfigError as exc:
+            raise ConfigError(f"{exc} (the settings of {prefix} {self.name!r})") from None
 
 
 class Registry(Generic[T]):

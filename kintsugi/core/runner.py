@@ -13,81 +13,13 @@ import time
 import traceback
 from typing import Any, Callable
 
-from pydantic import ValidationError
-
-from kintsugi.core.config import apply_overrides
-from kintsugi.core.errors import ConfigError, KintsugiError
+from kintsugi.core.errors import KintsugiError
 from kintsugi.core.log import TrialLog
-from kintsugi.core.plugins import load_builtins
-from kintsugi.core.record import Event, ReasonerSettings, TrialRecord, TrialSpec
-from kintsugi.core.registry import METHODS, REASONERS, TASKS
+from kintsugi.core.record import Event, TrialRecord, TrialSpec
+from kintsugi.core.resolve import resolve
 
 Echo = Callable[[str], None]
 Attach = Callable[[Any, TrialLog], None]
-
-
-def split_overrides(overrides: dict[str, Any]) -> tuple[dict[str, Any], dict[str, Any], dict[str, Any]]:
-    """(task, method, reasoner) overrides: `method.<key>` go to the method's config, `reasoner.<key>` to the
-    reasoner settings (`reasoner_settings`), every other key to the task's."""
-    method = {k.split(".", 1)[1]: v for k, v in overrides.items() if k.startswith("method.")}
-    reasoner = {k.split(".", 1)[1]: v for k, v in overrides.items() if k.startswith("reasoner.")}
-    task = {k: v for k, v in overrides.items() if not k.startswith(("method.", "reasoner."))}
-    return task, method, reasoner
-
-
-def resolve(spec: TrialSpec) -> tuple[Any, Any, Any, Any, Any]:
-    """(task, method entry, task config, method config, reasoner settings) for a spec; ConfigError names
-    what is wrong."""
-    load_builtins()
-    task = TASKS.get(spec.task).factory()
-    entry = METHODS.get(spec.method)
-    if task.method_tag not in entry.tags:
-        fits = [e.name for e in METHODS if task.method_tag in e.tags]
-        raise ConfigError(f"method {spec.method!r} does not run {task.name} (it drives another robot); "
-                          f"methods that do: {', '.join(fits) or '(none)'}")
-    task_overrides, method_overrides, reasoner_overrides = split_overrides(spec.overrides)
-    cfg = task.config(task_overrides)
-    task.check_variant(spec.variant, cfg)
-    return task, entry, cfg, entry.configure(method_overrides), reasoner_settings(spec.reasoner, reasoner_overrides)
-
-
-def backend_options(entry: Any, options: dict[str, Any]) -> Any:
-    """A reasoner backend's `options` validated by its settings class; ConfigError names
-    `reasoner.options.<key>`."""
-    try:
-        return entry.config.model_validate(dict(options))
-    except ValidationError as exc:
-        known = ", ".join(entry.config.model_fields) or "none"
-        problems = []
-        for err in exc.errors(include_url=False, include_input=False):
-            key = ".".join(["reasoner.options", *(str(p) for p in err["loc"])])
-            if err["type"] == "extra_forbidden":
-                problems.append(f"unknown key {key!r} (the {entry.name} backend's options: {known})")
-            else:
-                problems.append(f"{key}: {err['msg']}")
-        raise ConfigError(f"bad reasoner option: {'; '.join(problems)}") from None
-
-
-def reasoner_settings(settings: ReasonerSettings, overrides: dict[str, Any]) -> ReasonerSettings:
-    """`settings` with `reasoner.*` overrides applied (keys without the prefix: `model`, `options.replies`),
-    checked: the backend must be registered and its options pass its settings class. Errors are one
-    line naming the key."""
-    options = dict(settings.options)
-    common: dict[str, Any] = {}
-    for key, value in overrides.items():
-        if key == "options":
-            if not isinstance(value, dict):
-                raise ConfigError(f"reasoner.options must be a JSON object of the backend's options, not {value!r}")
-            options |= value
-        elif key.startswith("options."):
-            options[key.removeprefix("options.")] = value
-        else:
-            common[key] = value
-    out = apply_overrides(settings, common, prefix="reasoner") if common else settings
-    out = out.model_copy(update={"options": options})
-    load_builtins()
-    backend_options(REASONERS.get(out.backend), options)
-    return out
 
 
 def run_trial(spec: TrialSpec, echo: Echo | None = None, attach: Attach | None = None) -> TrialRecord:
@@ -159,5 +91,4 @@ def _record(spec: TrialSpec, episode: Any, log: TrialLog, success: bool, verdict
     )
 
 
-__all__ = ["Event", "backend_options", "failed_record", "reasoner_settings", "resolve", "run_trial",
-           "split_overrides"]
+__all__ = ["Event", "failed_record", "run_trial"]

@@ -71,7 +71,8 @@ def compare(stored: TrialRecord, again: TrialRecord) -> list[str]:
 def replay(spec: TrialSpec, stored: TrialRecord, fps: float) -> Episode:
     """Run `spec` again with a recorder attached; the episode, or ReplayMismatch / KintsugiError."""
     from kintsugi.core.registry import TASKS
-    from kintsugi.core.runner import run_trial, split_overrides
+    from kintsugi.core.resolve import split_overrides
+    from kintsugi.core.runner import run_trial
 
     task = TASKS.get(spec.task).factory()
     cfg = task.config(split_overrides(spec.overrides)[0])

@@ -15,7 +15,7 @@ import importlib
 from typing import TYPE_CHECKING, Any, Callable
 
 from kintsugi.core.registry import NoSettings, REASONERS
-from kintsugi.core.runner import backend_options, reasoner_settings
+from kintsugi.core.resolve import backend_options, reasoner_settings
 
 if TYPE_CHECKING:
     from kintsugi.core.record import ReasonerSettings

@@ -13,7 +13,7 @@ from typer.testing import CliRunner
 from kintsugi.cli import app
 from kintsugi.core.errors import ConfigError, UnknownNameError
 from kintsugi.core.record import ReasonerSettings, TrialRecord, TrialSpec
-from kintsugi.core.runner import split_overrides
+from kintsugi.core.resolve import split_overrides
 from kintsugi.reasoning import REASONERS, load_builtin_backends, reasoner_settings
 
 
@@ -89,3 +89,16 @@ def test_run_trial_applies_reasoner_overrides_from_the_spec(tmp_path: Path) -> N
                               overrides={"reasoner.backend": "scripted", "reasoner.options.replies": str(replies)}))
     assert rec.transcript[0]["reply"] == {"success": False, "explanation": "scripted no"}
     assert "ran out" in rec.transcript[1]["error"] and "ran out" in rec.error
+
+
+def test_method_overrides_scope_to_one_method_with_methods_dot_name() -> None:
+    from kintsugi.core.errors import ConfigError
+    from kintsugi.core.resolve import check_scoped
+
+    over = {"method.latency_model_s": 1.0, "methods.agentchord.max_actions": 3, "cup.x": 0.1}
+    assert split_overrides(over, "agentchord")[1] == {"latency_model_s": 1.0, "max_actions": 3}
+    assert split_overrides(over, "doremi")[1] == {"latency_model_s": 1.0}
+    assert split_overrides(over)[0] == {"cup.x": 0.1}
+    check_scoped(over, ["agentchord", "doremi"])
+    with pytest.raises(ConfigError, match="names method 'rekep'"):
+        check_scoped({"methods.rekep.max_actions": 3}, ["agentchord"])

@@ -31,7 +31,7 @@ def test_tasks_and_methods_are_registered_with_their_tags() -> None:
 
 def test_other_systems_methods_are_refused_by_name() -> None:
     record = run_trial(_spec("pick-box", "scripted"))
-    assert record.error and "does not run pick-box" in record.error and "expert-fsm" in record.error
+    assert record.error and "does not run task 'pick-box'" in record.error and "expert-fsm" in record.error
     record = run_trial(TrialSpec(task="pick-box", method="expert-fsm", variant="round", condition="none", seed=0))
     assert record.error and "unknown variant 'round'" in record.error and "default" in record.error
     record = run_trial(_spec("pick-box", "expert-fsm", overrides={"box.no_such": 1}))

@@ -141,6 +141,6 @@ def test_bad_config_names_the_key() -> None:
 
 def test_methods_declare_their_tasks() -> None:
     record = run_trial(TrialSpec(task="pour-single", method="recovery", variant="default", condition="none", seed=0))
-    assert record.error and "does not run pour-single" in record.error and "scripted" in record.error
+    assert record.error and "does not run task 'pour-single'" in record.error and "scripted" in record.error
     record = run_trial(TrialSpec(task="peg-insertion", method="scripted", variant="round", condition="none", seed=0))
-    assert record.error and "does not run peg-insertion" in record.error and "baseline" in record.error
+    assert record.error and "does not run task 'peg-insertion'" in record.error and "baseline" in record.error
