@@ -68,7 +68,8 @@ def test_run_a_plugin_method_with_its_typed_settings(tmp_path: Path) -> None:
     res = invoke("run", "pour-single", *METHOD, "--method", "toy-first-actions", "--set", "method.max_action=3",
                  "--record", path)
     assert res.exit_code == 2
-    assert res.stderr.strip() == "error: unknown config key 'method.max_action': method has keys max_actions"
+    assert res.stderr.strip() == ("error: unknown config key 'method.max_action': method has keys max_actions "
+                                  "(the settings of method 'toy-first-actions')")
 
 
 @pytest.mark.slow
