@@ -14,10 +14,11 @@ from kintsugi.core.record import TrialSpec
 from kintsugi.core.runner import run_trial
 
 STEP_SLACK = 0.002
-"""How far AgentChord may run past a baseline's steps on the same seed, as a fraction of them. A settle ends
-when a read finds the object at rest, so machine-dependent floating point (CPU, BLAS build) can move a trial
-by a control step (on seed 64 AgentChord takes rekep's 1662 steps on one machine, one more on another);
-0.2 % of ~1600 steps is ~3 steps, far below the 24-27 that a second settle costs."""
+"""How far AgentChord may run past a baseline's recorded steps on the same seed, as a fraction of them. A
+settle ends when a read finds the object at rest, so machine-dependent floating point (CPU, BLAS build) moves
+a trial by a control step or so: on seed 64, where rekep's steps were recorded as 1662, both rekep and
+AgentChord take 1663 on another machine. 0.2 % of ~1600 steps is ~3 steps, far below the 24-27 steps that a
+second settle costs."""
 
 
 def within(steps: int, baseline_steps: int) -> bool:
