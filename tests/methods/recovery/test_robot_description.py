@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from importlib import resources
 
-from tests.fake_openai_server import FakeOpenAIServer, content, fake_openai  # noqa: F401
+from tests.fake_openai_server import FakeOpenAIServer, content
 from kintsugi.core.config import apply_overrides
 from kintsugi.methods.recovery.prompting import robot_facts
 from kintsugi.core.plugins import load_builtins
