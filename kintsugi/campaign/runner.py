@@ -112,8 +112,7 @@ def error_summary(records: list[TrialRecord]) -> str | None:
 
 def _checked(spec: TrialSpec, record: TrialRecord) -> TrialRecord:
     """A record must carry its trial's identity, or resume would rerun that trial forever."""
-    ident = ("key", "task", "method", "variant", "condition", "seed")
-    wrong = [f for f in ident if getattr(record, f) != (spec.key if f == "key" else getattr(spec, f))]
+    wrong = [f for f, v in spec.identity().items() if getattr(record, f) != v]
     if not wrong:
         return record
     return failed_record(

@@ -45,6 +45,11 @@ class TrialSpec(StrictModel):
         """Identity of a trial inside a campaign (resume skips keys already recorded)."""
         return f"{self.task}/{self.method}/{self.variant}/{self.condition}/{self.seed}"
 
+    def identity(self) -> dict[str, Any]:
+        """The fields a record copies from its spec (and a campaign checks it did)."""
+        return {"key": self.key, "task": self.task, "method": self.method, "variant": self.variant,
+                "condition": self.condition, "seed": self.seed}
+
 
 class SkillLog(StrictModel):
     """One execution of one skill, as the robot saw it (plus the method's verdict)."""

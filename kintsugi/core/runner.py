@@ -38,8 +38,7 @@ def run_trial(spec: TrialSpec, echo: Echo | None = None, attach: Attach | None =
 
 def failed_record(spec: TrialSpec, error: str) -> TrialRecord:
     """The record of a trial that could not run (or whose worker died): a failure with its reason."""
-    return TrialRecord(key=spec.key, task=spec.task, method=spec.method, variant=spec.variant,
-                       condition=spec.condition, seed=spec.seed, error=error)
+    return TrialRecord(**spec.identity(), error=error)
 
 
 def _run(spec: TrialSpec, echo: Echo | None, attach: Attach | None) -> TrialRecord:
@@ -77,8 +76,7 @@ def _record(spec: TrialSpec, episode: Any, log: TrialLog, success: bool, verdict
             error: str | None, video: str | None) -> TrialRecord:
     calls = log.transcript
     return TrialRecord(
-        key=spec.key, task=spec.task, method=spec.method, variant=spec.variant,
-        condition=spec.condition, seed=spec.seed, params=episode.params,
+        **spec.identity(), params=episode.params,
         success=bool(success), framework_success=verdict,
         executions=dict(log.executions), transitions=log.transitions, skills=log.skills,
         events=sorted(log.events, key=lambda e: e.t),

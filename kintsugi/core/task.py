@@ -41,6 +41,8 @@ class Episode(ABC):
     to a method).
     """
 
+    world: Any
+    """The evaluation world: where the truth lives; only the episode and its scorer read it."""
     robot: Any
     video: VideoSink | None = None
 
@@ -58,12 +60,13 @@ class Episode(ABC):
         """The trial's drawn parameters (and measured truth) for the record."""
 
     @property
-    @abstractmethod
-    def sim_time(self) -> float: ...
+    def sim_time(self) -> float:
+        return self.robot.sim_time
 
     @property
-    @abstractmethod
-    def physics_steps(self) -> int: ...
+    def physics_steps(self) -> int:
+        """Physics steps the evaluation world took (the world counts them)."""
+        return self.world.steps
 
     def disturbances(self) -> list[tuple[float, str]]:
         """(sim time, what) of every disturbance the world applied (drops, shifts, knocks)."""
@@ -74,8 +77,9 @@ class Episode(ABC):
         return (f"outcome: ground truth {'SUCCESS' if success else 'FAILURE'}, "
                 f"method's verdict {'success' if verdict else 'failure'}")
 
-    @abstractmethod
-    def close(self) -> None: ...
+    def close(self) -> None:
+        """Free the world's renderers and buffers."""
+        self.world.close()
 
 
 class Task(ABC):

@@ -48,19 +48,8 @@ class ContactEpisode(Episode):
     def params(self) -> dict[str, Any]:
         return dict(self.setup.params)
 
-    @property
-    def sim_time(self) -> float:
-        return self.robot.sim_time
-
-    @property
-    def physics_steps(self) -> int:
-        return self.world.steps
-
     def outcome_text(self, success: bool, verdict: bool) -> str:
         return "ground truth: " + ("SUCCESS" if success else "FAILURE")
-
-    def close(self) -> None:
-        self.world.close()
 
 
 class ContactTask(Task):

@@ -43,20 +43,9 @@ class PegEpisode(Episode):
                                             "tip_offset_x_mm": round(truth.tip_offset_x_mm, 3),
                                             "tilt_deg": round(truth.tilt_deg, 3)}
 
-    @property
-    def sim_time(self) -> float:
-        return self.robot.sim_time
-
-    @property
-    def physics_steps(self) -> int:
-        return self.world.steps
-
     def outcome_text(self, success: bool, verdict: bool) -> str:
         return (f"outcome: ground truth G {'SUCCESS' if success else 'FAILURE'}, "
                 f"framework F {'success' if verdict else 'failure'}")
-
-    def close(self) -> None:
-        self.world.close()
 
 
 class PegInsertionTask(Task):

@@ -62,17 +62,6 @@ class TabletopEpisode(Episode):
     def params(self) -> dict[str, Any]:
         return self._params.flat()
 
-    @property
-    def sim_time(self) -> float:
-        return self.robot.sim_time
-
-    @property
-    def physics_steps(self) -> int:
-        return self.world.steps
-
-    def close(self) -> None:
-        self.world.close()
-
 
 class TabletopTask(Task):
     config_type = TabletopConfig
