@@ -5,7 +5,7 @@ from __future__ import annotations
 import json
 from typing import Any, Annotated, TypeVar
 
-from pydantic import AfterValidator, BaseModel, ConfigDict, ValidationError
+from pydantic import AfterValidator, BaseModel, ConfigDict, Field, ValidationError, model_validator
 
 from kintsugi.core.errors import ConfigError
 
@@ -16,6 +16,27 @@ class StrictModel(BaseModel):
     """Frozen pydantic model; an unknown key is an error, not a silent no-op."""
 
     model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class SimSection(StrictModel):
+    """The physics settings every world has: its timestep and its contact stiffness (MuJoCo's solref
+    time constant), which must span at least two steps of the finest world that simulates it or
+    contacts ring and the simulation diverges. A world subclasses it with its own defaults and fields."""
+
+    timestep_s: float = Field(0.002, gt=0, le=0.005)
+    contact_timeconst_s: float = Field(0.004, gt=0)
+    """Contact stiffness (solref); keep it >= 2 x the timestep."""
+
+    def coarsest_step(self) -> tuple[str, float]:
+        """(field, seconds) of the coarsest timestep stepping these contacts."""
+        return "timestep_s", self.timestep_s
+
+    @model_validator(mode="after")
+    def _stable(self) -> "SimSection":
+        name, dt = self.coarsest_step()
+        if self.contact_timeconst_s < 2 * dt:
+            raise ValueError(f"sim.contact_timeconst_s must be >= 2 x sim.{name}")
+        return self
 
 
 def _ordered(r: tuple[float, float]) -> tuple[float, float]:

@@ -8,9 +8,9 @@ above it. Every randomized quantity is a `Range`: the `none` condition uses its 
 
 from __future__ import annotations
 
-from pydantic import Field, model_validator
+from pydantic import Field
 
-from kintsugi.core.config import Range, StrictModel
+from kintsugi.core.config import Range, SimSection as BaseSim, StrictModel
 
 RGBA = tuple[float, float, float, float]
 
@@ -61,7 +61,7 @@ class TableSection(StrictModel):
     """Used only where the other geom has no friction of its own (objects' frictions win, see scene.py)."""
 
 
-class SimSection(StrictModel):
+class SimSection(BaseSim):
     timestep_s: float = Field(0.002, gt=0, le=0.005)
     """Evaluation world (the truth)."""
     planning_timestep_s: float = Field(0.01, gt=0, le=0.02)
@@ -70,11 +70,8 @@ class SimSection(StrictModel):
     """Contact stiffness (solref) of both worlds; keep it >= 2 x planning_timestep_s."""
     impratio: float = Field(1.0, ge=1)
 
-    @model_validator(mode="after")
-    def _stable(self) -> SimSection:
-        if self.contact_timeconst_s < 2 * self.planning_timestep_s:
-            raise ValueError("sim.contact_timeconst_s must be >= 2 x sim.planning_timestep_s")
-        return self
+    def coarsest_step(self) -> tuple[str, float]:
+        return "planning_timestep_s", self.planning_timestep_s
 
 
 class ControlSection(StrictModel):

@@ -10,7 +10,7 @@ from typing import Literal
 
 from pydantic import Field, field_validator
 
-from kintsugi.core.config import Range, StrictModel
+from kintsugi.core.config import Range, SimSection as BaseSim, StrictModel
 from kintsugi.perception.segment import PerceptionConfig
 
 
@@ -98,7 +98,7 @@ class CameraSection(StrictModel):
     """Horizontal image centre of the side view (its image right is +x)."""
 
 
-class SimSection(StrictModel):
+class SimSection(BaseSim):
     timestep_s: float = Field(0.001, gt=0, le=0.005)
     contact_timeconst_s: float = Field(0.002, gt=0)
     """Contact stiffness (MuJoCo solref); must be >= 2 x timestep."""
