@@ -25,7 +25,7 @@ TERM = re.compile(r"\??[A-Za-z][A-Za-z0-9_]*|_|[A-Za-z][A-Za-z0-9_]*\(\s*[A-Za-z
 _ARG_SPLIT = re.compile(r",(?![^()]*\))")
 Literal_ = Annotated[str, Field(max_length=200)]
 FAILURE_MODES = ("missed_grasp", "object_moved", "toppled", "drop", "slip", "ik_infeasible")
-"""The failure modes the arranger is asked to anticipate (issue 8)."""
+"""The failure modes the arranger is asked to anticipate."""
 
 
 @functools.lru_cache(maxsize=8192)
