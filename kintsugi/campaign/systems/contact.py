@@ -66,10 +66,10 @@ def cell_figures(records: Sequence[TrialRecord]) -> dict[str, Any]:
         if figures.plan_from:
             sources["memory" if figures.plan_from.startswith("memory") else figures.plan_from] += 1
         for i, a in enumerate(figures.attempts):
-            if a.get("code_ms_per_step") is not None and a.get("mppi_ms_per_step"):
-                code.append(a["code_ms_per_step"])
-                mppi.append(a["mppi_ms_per_step"])
-            e = belief_error(a.get("beliefs_before"), r.params, target_object(r.task))
+            if a.code_ms_per_step is not None and a.mppi_ms_per_step:
+                code.append(a.code_ms_per_step)
+                mppi.append(a.mppi_ms_per_step)
+            e = belief_error(a.beliefs_before, r.params, target_object(r.task))
             if e:
                 errs[i].append(e)
     cell: dict[str, Any] = {"trials": n, "successes": k, "rate": format_rate(k, n),

@@ -13,8 +13,8 @@ TRUTH = {"box.mass_kg": 0.5, "box.friction": 0.4}
 
 
 def attempt(mass: float, friction: float, code: float = 1.0, mppi: float = 20.0) -> dict:
-    return {"beliefs_before": {"box": {"mass_kg": mass, "friction": friction}},
-            "code_ms_per_step": code, "mppi_ms_per_step": mppi}
+    return {"attempt": 1, "beliefs_before": {"box": {"mass_kg": mass, "friction": friction}}, "source": "",
+            "stages": [], "regions": [], "knobs": {}, "code_ms_per_step": code, "mppi_ms_per_step": mppi}
 
 
 def rec(method: str, seed: int, success: bool, figures: CoralFigures | None, **kw) -> TrialRecord:
