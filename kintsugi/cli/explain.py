@@ -76,6 +76,8 @@ class Entry:
     text: str
     call: dict[str, Any] | None = None
     inferred: bool = False
+    wall_s: float | None = None
+    """Wall-clock seconds since the trial started, where the record holds them."""
 
     @property
     def t(self) -> float:
@@ -156,7 +158,7 @@ def timeline(rec: TrialRecord) -> list[Entry]:
     skills = [(t, 1, i, 0, 0) for i, t in enumerate(skill_end_times(rec))]
     events = [(e.t, 2, k, 0, 0) for k, e in enumerate(rec.events)]
     ends = {(round(t, 4), s.skill) for t, s in zip(skill_end_times(rec), rec.skills)}
-    entries = [Entry(key, "event", f"{e.kind}: {e.detail}" if e.detail else e.kind)
+    entries = [Entry(key, "event", f"{e.kind}: {e.detail}" if e.detail else e.kind, wall_s=e.wall_s)
                for key, e in zip(events, rec.events)
                if not (e.kind in STAGE_ENDS and (round(e.t, 4), e.detail) in ends)]  # the skill line says it
     told = set()  # a judge's explanation is the checked skill's message: tell it once, on the call
@@ -164,9 +166,14 @@ def timeline(rec: TrialRecord) -> list[Entry]:
         entries.append(Entry(key, "call", _call_text(call), call=call, inferred=inferred))
         if call.get("role") == "judge" and isinstance(call.get("reply"), dict):
             told.add(call["reply"].get("explanation"))
-    entries += [Entry(key, "skill", _skill_text(s, s.message not in told)) for key, s in zip(skills, rec.skills)]
+    entries += [Entry(key, "skill", _skill_text(s, s.message not in told), wall_s=s.wall_s)
+                for key, s in zip(skills, rec.skills)]
     entries.sort(key=lambda e: e.key)
     return entries
+
+
+def _wall(seconds: float | None) -> str:
+    return "" if seconds is None else f" [wall {seconds:.2f} s]"
 
 
 def outcome(s: SkillLog) -> str:
@@ -258,7 +265,7 @@ def explain_record(rec: TrialRecord, console: Console, full: bool = False) -> No
     grid.add_column(no_wrap=True)
     grid.add_column(overflow="fold")
     for when, label, e, n in _rows(timeline(rec)):
-        text = Text(e.text + (f" (x{n})" if n > 1 else ""), style="bold" if e.kind == "skill" else "")
+        text = Text(e.text + (f" (x{n})" if n > 1 else "") + _wall(e.wall_s), style="bold" if e.kind == "skill" else "")
         if full and e.call is not None:
             text.append("\n" + json.dumps({k: e.call.get(k) for k in ("request", "reply", "error")}, indent=1),
                         style="")

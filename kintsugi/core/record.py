@@ -66,12 +66,17 @@ class SkillLog(StrictModel):
     sim_time: float = 0.0
     """The absolute sim time (s) at which the skill ended, on the trial's one clock, in every system;
     a skill's duration is the difference to the previous skill's (or the start's) time."""
+    wall_s: float | None = None
+    """Wall-clock seconds since the trial started, when the skill ended (None in older records)."""
 
 
 class Event(StrictModel):
     t: float
+    """Sim time (s) on the trial's one clock."""
     kind: str
     detail: str = ""
+    wall_s: float | None = None
+    """Wall-clock seconds since the trial started, when the event was logged (None in older records)."""
 
 
 class Figures(StrictModel):
@@ -163,6 +168,8 @@ class TrialRecord(StrictModel):
         data = self.model_dump(mode="json", exclude={"wall_time", "reasoning_latency_s"})
         for call in data["transcript"]:
             call.pop("latency_s", None)
+        for entry in data["events"] + data["skills"]:
+            entry.pop("wall_s", None)
         for slot in ("task_figures", "method_figures"):
             data[slot] = _without_wall_clock(data[slot])
         return data

@@ -15,7 +15,7 @@ from typing import Any, Callable
 
 from kintsugi.core.errors import KintsugiError
 from kintsugi.core.log import TrialLog
-from kintsugi.core.record import Event, TrialRecord, TrialSpec
+from kintsugi.core.record import TrialRecord, TrialSpec
 from kintsugi.core.resolve import resolve
 
 Echo = Callable[[str], None]
@@ -30,7 +30,7 @@ def run_trial(spec: TrialSpec, echo: Echo | None = None, attach: Attach | None =
     """
     start = time.perf_counter()
     try:
-        record = _run(spec, echo, attach)
+        record = _run(spec, echo, attach, start)
     except Exception as exc:  # noqa: BLE001 - a campaign must survive any trial failure
         record = failed_record(spec, f"{type(exc).__name__}: {exc}\n{traceback.format_exc(limit=4)}")
     return record.model_copy(update={"wall_time": time.perf_counter() - start})
@@ -41,13 +41,13 @@ def failed_record(spec: TrialSpec, error: str) -> TrialRecord:
     return TrialRecord(**spec.identity(), error=error)
 
 
-def _run(spec: TrialSpec, echo: Echo | None, attach: Attach | None) -> TrialRecord:
+def _run(spec: TrialSpec, echo: Echo | None, attach: Attach | None, started: float) -> TrialRecord:
     task, entry, cfg, method_cfg, reasoner = resolve(spec)
     episode = task.episode(cfg, spec.variant, spec.condition, spec.seed, video=bool(spec.video))
     try:
         method = entry.factory(episode.context(entry.tags, reasoner, spec.seed), method_cfg)
         video = episode.video
-        log = TrialLog(echo=echo, on_status=video.status if video is not None else None)
+        log = TrialLog(echo=echo, on_status=video.status if video is not None else None, started=started)
         if attach is not None:
             attach(episode.robot, log)
         error = None
@@ -64,7 +64,10 @@ def _run(spec: TrialSpec, echo: Echo | None, attach: Attach | None) -> TrialReco
         saved = None
         if video is not None and video.frames:
             video.finish(episode.outcome_text(success, verdict), success)  # scored: the video may show truth now
-            saved = video.save(spec.video)
+            try:
+                saved = video.save(spec.video)
+            except KintsugiError as exc:  # the trial ran and was scored: keep it, say what went wrong
+                log.event(episode.sim_time, "video", f"not saved: {exc}")
             for kind, detail in getattr(video, "notes", ()):
                 log.event(episode.sim_time, kind, detail)
         return _record(spec, episode, log, success, verdict, figures, error, saved)
@@ -89,4 +92,4 @@ def _record(spec: TrialSpec, episode: Any, log: TrialLog, success: bool, verdict
     )
 
 
-__all__ = ["Event", "failed_record", "run_trial"]
+__all__ = ["failed_record", "run_trial"]

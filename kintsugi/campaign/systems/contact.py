@@ -21,7 +21,7 @@ from kintsugi.campaign.plan import CampaignConfig
 from kintsugi.campaign.stats import format_rate, mean
 from kintsugi.campaign.tables import TextTable, group_by_cell, successes
 from kintsugi.core.record import TrialRecord
-from kintsugi.methods.coral.method import CoralFigures
+from kintsugi.methods.coral.figures import CoralFigures
 
 DASH = "—"
 

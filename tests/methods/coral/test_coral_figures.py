@@ -6,7 +6,7 @@ import pytest
 
 from kintsugi.core.record import TrialSpec
 from kintsugi.core.runner import run_trial
-from kintsugi.methods.coral.method import CoralFigures
+from kintsugi.methods.coral.figures import CoralFigures
 
 
 @pytest.mark.slow

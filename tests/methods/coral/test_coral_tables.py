@@ -4,7 +4,7 @@ import pytest
 
 from kintsugi.campaign.plan import CampaignConfig
 from kintsugi.core.record import TrialRecord
-from kintsugi.methods.coral.method import CoralFigures
+from kintsugi.methods.coral.figures import CoralFigures
 from kintsugi.campaign.systems.contact import belief_error, summarize, table_i
 
 CFG = CampaignConfig(task="flip-box", methods=["coral", "l2r", "expert"], variants=["default"],
