@@ -1,5 +1,6 @@
 # Two commands for a fresh machine (Python 3.11 + the package registries):
-#   make demo   set up, then run a small offline peg-insertion campaign and print its tables
+#   make demo   set up, then run a small offline campaign of each system (A peg insertion, B AgentChord,
+#               C CoRAL) and print their tables
 #   make test   set up, then run the test suite
 PY ?= python3
 VENV := .venv
@@ -16,7 +17,10 @@ setup: $(BIN)/kintsugi
 
 demo: setup
 	$(BIN)/kintsugi bench peg-insertion --methods baseline,recovery --shapes round,square,rectangle \
-		--conditions none,all --trials 5 --workers 2 --out runs/demo
+		--conditions none,all --trials 5 --workers 2 --out runs/demo/peg-insertion
+	$(BIN)/kintsugi bench pour-single --methods scripted,agentchord --conditions drop \
+		--set disturbance.drop_p=0.3 --trials 3 --workers 2 --out runs/demo/pour-single
+	$(BIN)/kintsugi bench flip-box --methods coral,l2r --trials 2 --workers 2 --out runs/demo/flip-box
 
 test: setup
 	$(BIN)/pytest -n 2

@@ -33,15 +33,19 @@ def _main(
 def run(
     task: Annotated[str, typer.Argument(help="registered task, see `kintsugi tasks`")],
     method: Annotated[Optional[str], typer.Option(
-        help="registered method, see `kintsugi methods` [default: the task's reference method]")] = None,
+        help="registered method, see `kintsugi methods` [default: the task's own system's method: "
+             "recovery, agentchord or coral]")] = None,
     shape: Annotated[Optional[str], typer.Option(
         "--shape", "--variant", help="task variant, e.g. a peg shape [default: the task's first]")] = None,
-    condition: Annotated[str, typer.Option(help="condition, see `kintsugi tasks` (e.g. none, pose, all)")] = "none",
-    seed: Annotated[int, typer.Option(min=0, help="seed of the condition's random draws (hole offset, grasp "
-                                                  "angle, friction); the same seed gives the same trial")] = 0,
+    condition: Annotated[Optional[str], typer.Option(
+        help="condition, see `kintsugi tasks` (e.g. none, pose, drop, all) [default: the task's first default "
+             "condition, the one `kintsugi bench` runs first]")] = None,
+    seed: Annotated[int, typer.Option(min=0, help="seed of the condition's random draws (the trial's hidden "
+                                                  "truth: poses, frictions, masses, disturbances); the same "
+                                                  "seed gives the same trial")] = 0,
     video: Annotated[Optional[Path], typer.Option(help="write an .mp4 or .gif of the scene camera")] = None,
     record: Annotated[Optional[Path], typer.Option(
-        help="trial record .json (default: runs/<key, / as __>__<reasoner>.json)")
+        help="trial record .json (default: runs/<key, / as __>__<reasoner>[__set-<hash of the --set values>].json)")
     ] = None,
     set_: SetOpt = None,
     reasoner: ReasonerOpt = "embedded",
@@ -63,8 +67,9 @@ def run(
     from kintsugi.core.video import check_video_path
 
     try:  # every name, setting and output path is checked before the trial spends anything
-        default_method, default_variant, _ = task_defaults(task, plugin)
-        cfg = build_config(task=task, methods=[method or default_method], variants=[shape or default_variant], conditions=[condition], trials=1,
+        default_method, default_variant, default_conditions = task_defaults(task, plugin)
+        cfg = build_config(task=task, methods=[method or default_method], variants=[shape or default_variant],
+                           conditions=[condition or default_conditions[0]], trials=1,
                            base_seed=seed, overrides=_overrides(set_), plugins=plugin,
                            reasoner=_reasoner(reasoner, model, base_url, api_key_env, structured_output))
         spec = expand(cfg)[0].model_copy(update={"video": str(check_video_path(video)) if video else None})
@@ -248,6 +253,36 @@ def reasoners(plugin: PluginOpt = None) -> None:
 
     load_builtin_backends()
     _list("reasoners", REASONERS)
+
+
+@app.command()
+def config(
+    task: Annotated[str, typer.Argument(help="registered task, see `kintsugi tasks`")],
+    method: Annotated[Optional[str], typer.Option(help="also print this method's settings")] = None,
+    set_: SetOpt = None,
+    plugin: PluginOpt = None,
+) -> None:
+    """Print a task's config (and a method's settings) as JSON, with any --set values applied.
+
+    Every key printed can be set with `--set <section>.<key>=value` (`method.<key>` for the method's)."""
+    _plugins(plugin)
+    import json
+
+    from kintsugi.core.plugins import load_builtins
+    from kintsugi.core.registry import TASKS
+    from kintsugi.core.resolve import method_for, split_overrides
+
+    try:
+        load_builtins()
+        made = TASKS.get(task).factory()
+        task_overrides, method_overrides, _ = split_overrides(_overrides(set_), method)
+        out = {"task": made.config(task_overrides).model_dump(mode="json")}
+        if method:
+            out["method"] = method_for(made, method).configure(method_overrides).model_dump(mode="json")
+    except KintsugiError as exc:
+        _fail(exc)
+        return
+    console.print_json(json.dumps(out))
 
 
 @app.command()

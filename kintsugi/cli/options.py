@@ -3,6 +3,8 @@ error exits behind them."""
 
 from __future__ import annotations
 
+import hashlib
+import json
 import re
 from pathlib import Path
 from typing import Annotated, Literal, Optional
@@ -92,8 +94,8 @@ def _echo(text: str) -> None:
 
 
 def _record_path(spec) -> Path:  # noqa: ANN001 - a TrialSpec
-    """runs/<task>__<method>__<variant>__<condition>__<seed>__<reasoner>.json: another reasoner
-    (or model) never overwrites the record of the same trial."""
+    """runs/<task>__<method>__<variant>__<condition>__<seed>__<reasoner>[__set-<hash>].json: another
+    reasoner (or model) or other `--set` values never overwrite the record of the same trial."""
     r = spec.reasoner
     model = r.model
     if model is None and r.backend == "openai":
@@ -101,4 +103,8 @@ def _record_path(spec) -> Path:  # noqa: ANN001 - a TrialSpec
 
         model = DEFAULT_OPENAI_MODEL
     who = re.sub(r"[^A-Za-z0-9._+-]+", "-", r.backend + (f"-{model}" if model else ""))
-    return Path("runs") / f"{spec.key.replace('/', '__')}__{who}.json"
+    settings = ""
+    if spec.overrides:
+        text = json.dumps(spec.overrides, sort_keys=True, default=str)
+        settings = "__set-" + hashlib.sha1(text.encode()).hexdigest()[:8]
+    return Path("runs") / f"{spec.key.replace('/', '__')}__{who}{settings}.json"

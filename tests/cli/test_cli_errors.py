@@ -128,6 +128,8 @@ def test_default_record_path_names_the_reasoner(tmp_path: Path, monkeypatch: pyt
     assert _record_path(spec) == Path("runs/t__m__v__c__2__openai-qwen2.5vl-7b.json")
     default_model = _record_path(spec.model_copy(update={"reasoner": ReasonerSettings(backend="openai")}))
     assert default_model.name.startswith("t__m__v__c__2__openai-") and default_model != _record_path(spec)
+    a, b = (_record_path(spec.model_copy(update={"overrides": {"hole.friction_scale": [1, v]}})) for v in (3, 5))
+    assert a != b and a.name.startswith("t__m__v__c__2__openai-qwen2.5vl-7b__set-")  # other --set, other file
 
 
 def test_version() -> None:
