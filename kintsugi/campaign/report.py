@@ -47,7 +47,34 @@ def machine_info() -> dict[str, str]:
         "python": sys.version.split()[0],
         "mujoco": mj,
         "kintsugi": kintsugi.__version__,
+        "commit": _commit(),
     }
+
+
+def _commit() -> str:
+    """The git commit of the kintsugi source the numbers came from (and whether it had local changes)."""
+    import subprocess
+
+    src = Path(kintsugi.__file__).resolve().parent
+    try:
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=src, capture_output=True, text=True,
+                              timeout=5)
+        if head.returncode:
+            return "not a git checkout"
+        dirty = subprocess.run(["git", "status", "--porcelain", "--", "."], cwd=src, capture_output=True,
+                               text=True, timeout=5).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        return "unknown (git not available)"
+    return head.stdout.strip() + (" with local changes" if dirty else "")
+
+
+def _videos(out: Path, records: Sequence[TrialRecord]) -> list[tuple[str, str]]:
+    """(trial key, path relative to the report) of every recorded video that exists."""
+    found = []
+    for r in records:
+        if r.video and Path(r.video).exists():
+            found.append((r.key, os.path.relpath(Path(r.video).resolve(), out.resolve())))
+    return found
 
 
 def _write(path: Path, text: str) -> None:
@@ -90,6 +117,9 @@ def write_report(
 
     md = [f"# kintsugi campaign report — {cfg.task}", "", summary, ""]
     md += [to_markdown(t) for t in tables]
+    videos = _videos(out, recs)
+    if videos:
+        md += ["## Videos", ""] + [f"- [{key}]({rel})" for key, rel in videos] + [""]
     md += ["## Campaign config", "", "```json", cfg_json, "```", "", "## Machine", ""]
     md += [f"- {k}: {v}" for k, v in info.items()]
     md_path = out / "report.md"
@@ -104,6 +134,8 @@ def write_report(
         f"<h1>kintsugi campaign report — {esc(cfg.task)}</h1><p>{esc(summary)}</p>",
         *[to_html(t) for t in tables],
         f"<h2>Plots</h2>{figs}" if figs else "",
+        ("<h2>Videos</h2><ul>" + "".join(f'<li><a href="{esc(rel)}">{esc(key)}</a></li>' for key, rel in videos)
+         + "</ul>") if videos else "",
         f"<h2>Campaign config</h2><pre>{esc(cfg_json)}</pre>",
         "<h2>Machine</h2><ul>" + "".join(f"<li>{esc(k)}: {esc(v)}</li>" for k, v in info.items()) + "</ul>",
     ]

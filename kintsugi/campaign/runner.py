@@ -6,6 +6,7 @@ command; every trial whose line reached the disk is skipped, every other one run
 
 from __future__ import annotations
 
+import time
 from pathlib import Path
 
 from rich.console import Console
@@ -75,6 +76,7 @@ def run_campaign(
     # A bar needs a terminal; in a log file (CI, nohup) it would print nothing until the end.
     lines = progress and not console.is_terminal
 
+    started, resumed = time.monotonic(), len(records)
     with store.appender() as appender, _progress(console, progress and not lines) as bar:
         task_id = bar.add_task(escape(cfg.task), total=len(specs), completed=len(records), ok=ok, err=err)
         for spec, record in runner.run(todo) if todo else ():
@@ -85,15 +87,27 @@ def run_campaign(
             err += record.error is not None
             bar.update(task_id, advance=1, ok=ok, err=err)
             if lines:
-                console.print(escape(progress_line(record, len(records), len(specs), ok, err)), highlight=False)
+                elapsed = time.monotonic() - started
+                eta = elapsed / (len(records) - resumed) * (len(specs) - len(records))
+                console.print(escape(progress_line(record, len(records), len(specs), ok, err, elapsed, eta)),
+                              highlight=False)
     return [records[s.key] for s in specs if s.key in records]
 
 
-def progress_line(record: TrialRecord, done: int, total: int, ok: int, err: int) -> str:
-    """One plain line per finished trial, for logs: done/total, key, outcome, wall time, running counts."""
+def progress_line(record: TrialRecord, done: int, total: int, ok: int, err: int,
+                  elapsed_s: float | None = None, eta_s: float | None = None) -> str:
+    """One plain line per finished trial, for logs: done/total, key, outcome, wall time, running counts,
+    and the campaign's elapsed time and estimated time left (from this run's pace)."""
     outcome = "success" if record.success else "failure"
     line = f"{done}/{total} {record.key}: {outcome}, {record.wall_time:.2f} s wall ({ok} ok, {err} errors)"
+    if elapsed_s is not None:
+        line += f" [{_clock(elapsed_s)} elapsed" + (f", ~{_clock(eta_s)} left]" if eta_s is not None else "]")
     return line + (f"; error: {first_line(record.error)}" if record.error else "")
+
+
+def _clock(seconds: float) -> str:
+    m, s = divmod(int(round(seconds)), 60)
+    return f"{m // 60}:{m % 60:02d}:{s:02d}" if m >= 60 else f"{m}:{s:02d}"
 
 
 def first_line(text: str) -> str:
