@@ -42,13 +42,13 @@ def method_for(task: Any, name: str) -> Entry:
 
 
 def check_scoped(overrides: dict[str, Any], methods: list[str]) -> None:
-    """`methods.<name>.<key>` must name one of the methods that will run."""
+    """`methods.<name>.<key>` must name a registered method (a suite may set one the run leaves out)."""
     for key in overrides:
         if key.startswith("methods."):
             name = key.split(".")[1] if key.count(".") >= 2 else ""
-            if name not in methods:
-                raise ConfigError(f"override {key!r} names method {name!r}, which this run does not use; "
-                                  f"its methods: {', '.join(methods)} (write methods.<method>.<key>)")
+            if name not in METHODS:
+                raise ConfigError(f"override {key!r} names method {name!r}, which is not registered; "
+                                  f"this run's methods: {', '.join(methods)} (write methods.<method>.<key>)")
 
 
 def resolve(spec: TrialSpec) -> tuple[Any, Any, Any, Any, Any]:

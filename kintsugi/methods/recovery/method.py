@@ -3,11 +3,11 @@
 Per skill: mechanical checks (pose, compression limit, OpenCV Table I or the
 goal-image comparison) -> the reasoner's fused verdict. On failure: stage 1
 analysis (what / why / how, as motions relative to the current goals), stage 2
-plan (skills from `recovery.skills`, by default CF2..CF4 as published, with
+plan (skills from the `skills` setting, by default CF2..CF4 as published, with
 absolute goals), validated and clamped before anything moves. Ten failed
 executions in a row end the trial (timeout).
 
-Beyond the paper (both off by default): when `recovery.skills` allows approach,
+Beyond the paper (both off by default): when the `skills` setting allows approach,
 approach is checked too (the free-hanging peg against its goal image: tilt and
 where the hole is) and a plan may re-approach, i.e. lift the peg, approach again
 with a corrected roll and y, and come down to contact; with `camera.side_view`
@@ -20,6 +20,7 @@ import cv2
 import numpy as np
 
 from kintsugi.core.registry import METHODS
+from kintsugi.methods.recovery.settings import RecoverySettings
 from kintsugi.methods.recovery.skill_log import log_skill, peg_figures
 from kintsugi.perception.checks import align_check, compression_check, fit_check, pose_check
 from kintsugi.perception.compare import compare_to_goal
@@ -77,14 +78,15 @@ def to_png(image: np.ndarray) -> bytes:
 
 
 class Recovery:
-    def __init__(self, ctx: PegContext) -> None:
+    def __init__(self, ctx: PegContext, settings: RecoverySettings = RecoverySettings()) -> None:
         self.ctx = ctx
         self.cfg = ctx.cfg
+        self.settings = settings
         self.reasoner = RecordingReasoner(make_reasoner(ctx.reasoner), records=[])
         self.goals = {s: dict(v) for s, v in ctx.goals.items()}  # mm / deg, each skill's own axes
         self.goal_images = ctx.goal_images()
         self.goal_png = {s: to_png(img) for s, img in self.goal_images.items()}
-        rec = self.cfg.recovery
+        rec = self.settings
         self.allowed = rec.skills  # what a plan may use, in contact-formation order
         self.check_approach = "approach" in self.allowed
         """Until it first succeeds: is the grasp as taught and the hole where the goals assume? Later
@@ -110,7 +112,7 @@ class Recovery:
             log.figures(peg_figures(log))
 
     def _run(self, robot: PegRobot, log: TrialLog) -> bool:
-        rec = self.cfg.recovery
+        rec = self.settings
         queue, history = list(SEQUENCE), []
         failures, executions, recovering = 0, 0, False
         while queue:
@@ -179,7 +181,7 @@ class Recovery:
 
     def _recover(self, robot: PegRobot, log: TrialLog, outcome: SkillOutcome, checks: list[CheckResult],
                  verdict: JudgeReply, history: list[Attempt]) -> list[str]:
-        rec = self.cfg.recovery
+        rec = self.settings
         skills = {s: list(SKILLS[s].axes) for s in self.allowed}
         analysis = ask(self.reasoner, "analyze", AnalyzeRequest(
             task=self.ctx.task_text, outcome=outcome, checks=checks, verdict=verdict, goals=self._pose_goals(),
@@ -230,6 +232,6 @@ def approach_check(image: np.ndarray, goal_image: np.ndarray, calib: CameraCalib
 
 
 @METHODS.register("recovery", "checks every skill and recovers failures with a reasoner (the paper's method)",
-                  tags=("peg-insertion", "reasoner"))
-def make_recovery(ctx: PegContext, settings: object = None) -> Recovery:
-    return Recovery(ctx)
+                  tags=("peg-insertion", "reasoner"), config=RecoverySettings)
+def make_recovery(ctx: PegContext, settings: RecoverySettings) -> Recovery:
+    return Recovery(ctx, settings)

@@ -1,7 +1,7 @@
 """Last line of defence between a reasoner's plan and the robot.
 
 Structural problems (skills the request does not allow, i.e. outside
-`recovery.skills`, axes a skill does not own, non-finite numbers) are rejected
+the method's `skills` setting, axes a skill does not own, non-finite numbers) are rejected
 with `PlanInvalid`, so a backend can ask the model to repair its reply. Numeric
 overreach is never rejected but clamped: each goal may move at most
 `max_step_mm` (degrees for roll) from the skill's current goal (the paper's one

@@ -18,6 +18,7 @@ from typing import Any
 
 from kintsugi.core.suite import Suite
 from kintsugi.core.config import apply_overrides
+from kintsugi.core.resolve import split_overrides
 from kintsugi.core.errors import UnknownNameError
 from kintsugi.worlds.peg.config import RECOVERY_SKILL_NAMES, PegTaskConfig
 
@@ -26,7 +27,11 @@ class PegSuite(Suite):
     """A peg-insertion suite; `config()` is its world, for checks of the suite itself."""
 
     def config(self) -> PegTaskConfig:
-        return apply_overrides(PegTaskConfig(), self.overrides)
+        return apply_overrides(PegTaskConfig(), split_overrides(self.overrides)[0])
+
+    def method_overrides(self, method: str) -> dict[str, Any]:
+        """The suite's settings of one method (`methods.<method>.<key>`), without the prefix."""
+        return split_overrides(self.overrides, method)[1]
 
 
 STRETCH_WORLD: dict[str, Any] = {
@@ -35,8 +40,8 @@ STRETCH_WORLD: dict[str, Any] = {
     "hole.friction_scale": [1.0, 10.0],
     "peg.clearance_mm": 1.0,
 }
-OPTIONS_ON: dict[str, Any] = {"recovery.skills": list(RECOVERY_SKILL_NAMES), "camera.side_view": True}
-OPTIONS_OFF: dict[str, Any] = {"recovery.skills": ["fit", "align", "insert"], "camera.side_view": False}
+OPTIONS_ON: dict[str, Any] = {"methods.recovery.skills": list(RECOVERY_SKILL_NAMES), "camera.side_view": True}
+OPTIONS_OFF: dict[str, Any] = {"methods.recovery.skills": ["fit", "align", "insert"], "camera.side_view": False}
 _CELLS = dict(shapes=("round", "square", "rectangle"), conditions=("all",), trials=30)
 
 SUITES: dict[str, PegSuite] = {

@@ -17,7 +17,6 @@ from functools import lru_cache
 
 import pytest
 
-from kintsugi.core.config import apply_overrides
 from kintsugi.methods.recovery.method import to_png
 from kintsugi.methods.recovery import embedded
 from kintsugi.methods.recovery.embedded import (
@@ -43,7 +42,7 @@ from kintsugi.worlds.peg.world import HOME_POSE, PegWorld, TrialParams
 
 GOALS = load_goals()
 REASONER = embedded  # the embedded answers: judge(request), analyze(request), plan(request)
-CFG = apply_overrides(PegTaskConfig(), {"recovery.skills": list(RECOVERY_SKILL_NAMES)})
+CFG = PegTaskConfig()
 ROBOT = describe_robot(CFG, "round", GOALS)
 ALL_SKILLS = {s: list(SKILLS[s].axes) for s in RECOVERY_SKILL_NAMES}
 

@@ -58,7 +58,7 @@ def _run(seed: int = 0, condition: str = "none", **overrides):  # noqa: ANN003, 
 def test_consecutive_failures_end_the_trial_as_timeout() -> None:
     Scripted.verdicts = []
     Scripted.plan_reply = PlanReply(steps=[PlanStep(skill="fit", goal={"y": 0.0})])
-    rec = _run(**{"recovery.max_consecutive_failures": 4})
+    rec = _run(**{"method.max_consecutive_failures": 4})
     assert not rec.framework_success
     assert any(e.kind == "timeout" and "4 consecutive" in e.detail for e in rec.events)
     assert rec.executions["fit"] == 4  # the first fit and three recoveries, all judged failed
@@ -68,7 +68,7 @@ def test_consecutive_failures_end_the_trial_as_timeout() -> None:
 def test_over_large_goal_update_is_clamped_to_max_step() -> None:
     Scripted.verdicts = [False, True, True, True]
     Scripted.plan_reply = PlanReply(steps=[PlanStep(skill="fit", goal={"y": 500.0})])
-    rec = _run(**{"recovery.max_step_mm": 4.0})
+    rec = _run(**{"method.max_step_mm": 4.0})
     fits = [s for s in rec.skills if s.skill == "fit"]
     assert fits[1].goal["y"] == pytest.approx(fits[0].goal["y"] + 4.0)
     assert any(e.kind == "plan-clamped" for e in rec.events)

@@ -36,7 +36,7 @@ def test_goals_that_no_longer_insert_are_an_error_naming_the_config_and_the_fix(
 
 
 def test_the_check_runs_once_per_config_and_shape() -> None:
-    cfg = apply_overrides(PegTaskConfig(), ["recovery.max_step_mm=7"])  # a config no other test uses
+    cfg = apply_overrides(PegTaskConfig(), ["scoring.min_depth_fraction=0.45"])  # a config no other test uses
     before = context_module._goal_images.cache_info()
     for _ in range(3):
         images = PegContext(cfg=cfg, shape="square").goal_images()

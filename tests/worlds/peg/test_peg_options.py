@@ -9,6 +9,10 @@ import kintsugi  # noqa: F401 - MUJOCO_GL before mujoco
 import numpy as np
 import pytest
 
+from kintsugi.core.plugins import load_builtins
+from kintsugi.core.registry import METHODS
+from kintsugi.methods.recovery.settings import RecoverySettings
+
 from kintsugi.core.config import apply_overrides
 from kintsugi.core.errors import ConfigError
 from kintsugi.perception.segment import measure
@@ -68,28 +72,31 @@ def test_approach_from_home_is_the_taught_straight_line() -> None:
     assert np.abs(off_line).max() < 1e-9
 
 
-# --- recovery.skills -----------------------------------------------------
+load_builtins()
+
+
+# --- the recovery method's skills setting -----------------------------------------------------
 
 def test_recovery_skills_default_is_the_papers() -> None:
-    assert CFG.recovery.skills == ("fit", "align", "insert")
+    assert RecoverySettings().skills == ("fit", "align", "insert")
 
 
 def test_recovery_skills_accept_reapproach_in_cf_order() -> None:
-    cfg = apply_overrides(CFG, ['recovery.skills=["insert","approach","fit","align","contact"]'])
-    assert cfg.recovery.skills == ("approach", "contact", "fit", "align", "insert")
+    cfg = METHODS.get("recovery").configure(['skills=["insert","approach","fit","align","contact"]'])
+    assert cfg.skills == ("approach", "contact", "fit", "align", "insert")
 
 
 @pytest.mark.parametrize(("value", "needle"), [
     ('["fit","wiggle"]', "'wiggle'"),
     ('["fit","fit"]', "fit more than once"),
     ("[]", "at least one"),
-    ("fit", "recovery.skills"),
+    ("fit", "method.skills"),
 ])
 def test_recovery_skills_rejects_bad_lists_by_name(value: str, needle: str) -> None:
     with pytest.raises(ConfigError) as exc:
-        apply_overrides(CFG, [f"recovery.skills={value}"])
+        METHODS.get("recovery").configure([f"skills={value}"])
     msg = str(exc.value)
-    assert "recovery.skills" in msg and needle in msg, msg
+    assert "method.skills" in msg and needle in msg and "'recovery'" in msg, msg
     if "wiggle" in needle:
         assert "approach, contact, fit, align, insert" in msg
 
