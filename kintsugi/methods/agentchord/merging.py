@@ -57,7 +57,7 @@ def _nominal_merge(start: State, edge: Any, graph: TaskGraph, facts: dict[str, S
     dearer, and then this merge is a good one, not always the best), so no merge beats its total, and the
     target, the earliest candidate, merges on a tie: only the plan to the target is searched, not one to every
     later node (the two earliest failures of rearrange-table planned the whole task for that, 150 ms of the
-    arranger's 320). The branches are the same (`tests/test_arranger_merge.py`)."""
+    arranger's 320). The branches are the same (`tests/methods/agentchord/test_arranger_merge.py`)."""
     import networkx as nx
 
     if not any(facts[n] == start for n in nx.ancestors(_nominal(graph), edge.target)):

@@ -148,7 +148,7 @@ class SimSection(BaseSim):
     """Penetration over which a contact's impedance rises from 0.95 to 0.99 (solimp width). At
     1 mm, a block or tray that lands on a corner at 2 m/s sinks 5 mm in one step, meets the
     stiffest impedance at once and leaves with more energy than it fell with (up to 40x);
-    at 1 cm no drop gains energy (tests/test_tabletop_physics.py)."""
+    at 1 cm no drop gains energy (tests/worlds/tabletop/test_tabletop_physics.py)."""
     control_dt_s: float = Field(0.01, gt=0)
     """How often a motion updates joint targets and watchers run."""
 

@@ -261,7 +261,7 @@ class FoldTowelTask(TabletopTask):
     contract_overrides = {"towel.count": 5, "towel.spacing_m": 0.05, "motion.linear_speed_m_s": 0.3,
                           "motion.joint_speed_deg_s": 180.0, "motion.settle_timeout_s": 0.3}
     """The contract test's short budget: a 5 x 5 cloth and twice the arm speed, same script
-    (tests/test_fold_towel.py has the real cloth)."""
+    (tests/worlds/tabletop/test_fold_towel.py has the real cloth)."""
 
     def config(self, overrides: dict | list) -> FoldTowelConfig:
         return apply_overrides(FoldTowelConfig(), overrides)
