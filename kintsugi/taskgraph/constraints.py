@@ -236,6 +236,64 @@ class InRegion(_Template):
         yield from self.point.refs()
 
 
+class Offset(_Template):
+    """`a` relative to `b` inside the box [lo, hi] (world axes, metres): the largest per-axis excursion outside it
+    (negative inside). Relations between objects: `left_of` (a's centre 8-22 cm to b's +y side), a stacked
+    object's bottom at its support's top (z within a few millimetres)."""
+
+    kind: Literal["offset"] = "offset"
+    a: Point
+    b: Point
+    lo: Vec3
+    hi: Vec3
+
+    @model_validator(mode="after")
+    def _ordered(self) -> "Offset":
+        if any(l > h for l, h in zip(self.lo, self.hi)):
+            raise ValueError(f"offset lo {self.lo} exceeds hi {self.hi} on some axis")
+        return self
+
+    def evaluate(self, f: Features) -> float:
+        pa, pb = self.a.read(f), self.b.read(f)
+        if pa is None or pb is None:
+            return NAN
+        d = [pa[i] - pb[i] for i in range(3)]
+        return max(max(self.lo[i] - d[i], d[i] - self.hi[i]) for i in range(3))
+
+    def refs(self):
+        yield from self.a.refs()
+        yield from self.b.refs()
+
+
+class Spacing(_Template):
+    """The distance between `a` and `b` (over `axes`, default horizontal) within [min_m, max_m]: the larger
+    excursion outside that band (negative inside). `beside`: next to, either side, not on or touching."""
+
+    kind: Literal["spacing"] = "spacing"
+    a: Point
+    b: Point
+    min_m: NonNeg = 0.0
+    max_m: NonNeg
+    axes: Axes = "xy"
+
+    @model_validator(mode="after")
+    def _ordered(self) -> "Spacing":
+        if self.min_m > self.max_m:
+            raise ValueError(f"spacing min_m {self.min_m} exceeds max_m {self.max_m}")
+        return self
+
+    def evaluate(self, f: Features) -> float:
+        pa, pb = self.a.read(f), self.b.read(f)
+        if pa is None or pb is None:
+            return NAN
+        d = norm((pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]), self.axes)
+        return max(self.min_m - d, d - self.max_m)
+
+    def refs(self):
+        yield from self.a.refs()
+        yield from self.b.refs()
+
+
 class Touching(_Template):
     """The arm's fingers touch `object` (or, with expect=false, do not): -1 satisfied, +1 violated."""
 
@@ -320,12 +378,12 @@ LEVEL_AXIS = math.sin(math.radians(60.0))
 
 TEMPLATES: tuple[type[_Template], ...] = (
     Drift, Upright, Tilted, NotGrasped, Detached, Visibility, Misaligned, Near, Above, InRegion, Touching, Heading,
-    Within,
+    Within, Offset, Spacing,
 )
 
 Constraint = Annotated[
     Union[Drift, Upright, Tilted, NotGrasped, Detached, Visibility, Misaligned, Near, Above, InRegion, Touching,
-          Heading, Within],
+          Heading, Within, Offset, Spacing],
     Field(discriminator="kind"),
 ]
 """Any template, chosen by its `kind` field in JSON."""

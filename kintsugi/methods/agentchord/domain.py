@@ -54,6 +54,21 @@ FLAT_MARGIN_M = 0.008
 reads a lying fork's height to a few millimetres; one on its side is 2-3 cm taller)."""
 REGION_TOL_M = 0.04
 """A sub-goal `in_region` holds when the perceived centroid is this close (x and y) to the region's centre."""
+ON_MARGIN_M = 0.005
+"""`on(x, y)`: x's centre this far inside y's perceived footprint..."""
+ON_GAP_M = (-0.01, 0.012)
+"""...and x's bottom this far below / above y's top (perception reads both to a few millimetres)."""
+SIDE_M = (0.08, 0.22)
+"""`left_of` / `right_of`: x's centre this far to the side (world y) of y's centre..."""
+SIDE_ALONG_M = 0.06
+"""...and within this of it front to back (world x)."""
+SIDE_AIM_M = 0.15
+"""Where a place beside an object aims: this far to its side (the middle of SIDE_M)."""
+BESIDE_M_RANGE = (0.08, 0.25)
+"""`beside(x, y)`: the centres this far apart horizontally, either side."""
+STACK_RISE_M = 0.05
+"""After setting an object down on another, the hand rises this far before it goes home (it does not drag
+the top object off)."""
 
 
 def _p(name, params, meaning, constraints=(), gripper=None, static=False) -> PredicateSpec:  # noqa: ANN001
@@ -106,6 +121,24 @@ PREDICATES = [
         {"kind": "above", "a": {"entity": "?2", "feature": "top"}, "b": {"entity": "?1", "feature": "bottom"},
          "min_gap": 0.0}]),
     _p("moved", ["object"], "the object was carried away from where it was first seen"),
+    _p("on", ["object", "object"], "the first object rests on top of the second (stacked): its centre within the "
+       "second's perceived footprint, its bottom at the second's top",
+       [{"kind": "within", "point": {"entity": "?1"}, "container": "?2", "margin": ON_MARGIN_M},
+        {"kind": "offset", "a": {"entity": "?1", "feature": "bottom"}, "b": {"entity": "?2", "feature": "top"},
+         "lo": [-2.0, -2.0, ON_GAP_M[0]], "hi": [2.0, 2.0, ON_GAP_M[1]]}]),
+    _p("beside", ["object", "object"], "the first object is next to the second on the table, either side: their "
+       f"centres {BESIDE_M_RANGE[0]}-{BESIDE_M_RANGE[1]} m apart horizontally",
+       [{"kind": "spacing", "a": {"entity": "?1"}, "b": {"entity": "?2"}, "min_m": BESIDE_M_RANGE[0],
+         "max_m": BESIDE_M_RANGE[1]},
+        {"kind": "in_region", "point": {"entity": "?1", "feature": "bottom"}, "lo": [-2.0, -2.0, -0.02],
+         "hi": [2.0, 2.0, 0.03]}]),
+    _p("left_of", ["object", "object"], "the first object is to the left (+y, the robot's left) of the second: "
+       f"its centre {SIDE_M[0]}-{SIDE_M[1]} m to that side, within {SIDE_ALONG_M} m of it front to back",
+       [{"kind": "offset", "a": {"entity": "?1"}, "b": {"entity": "?2"}, "lo": [-SIDE_ALONG_M, SIDE_M[0], -2.0],
+         "hi": [SIDE_ALONG_M, SIDE_M[1], 2.0]}]),
+    _p("right_of", ["object", "object"], "the first object is to the right (-y) of the second, as for left_of",
+       [{"kind": "offset", "a": {"entity": "?1"}, "b": {"entity": "?2"}, "lo": [-SIDE_ALONG_M, -SIDE_M[1], -2.0],
+         "hi": [SIDE_ALONG_M, -SIDE_M[0], 2.0]}]),
 ]
 
 
@@ -247,7 +280,37 @@ OPERATORS = [
         "both arms open on an object they hold on the table, rise clear and back away"),
 ]
 
+def _beside(name: str, side: str, sign: float) -> OperatorSpec:
+    other = "right_of" if side == "left_of" else "left_of"
+    return _op(name, {A: "arm", O: "object", T: "object"},
+               ["holding(?arm, ?obj)", "lifted(?obj)", "released(?target)", "on_table(?target)",
+                f"not {side}(?obj, ?target)"],
+               [f"{side}(?obj, ?target)", "beside(?obj, ?target)", "on_table(?obj)", "released(?obj)",
+                "hand_empty(?arm)", "moved(?obj)"],
+               ["holding(?arm, ?obj)", "lifted(?obj)", "over(?obj, _)", "over_place(?obj, _)",
+                f"{other}(?obj, ?target)"],
+               [{"name": "place", "args": {"arm": A, "x": "$x(?target)", "y": f"$y(?target, {sign * SIDE_AIM_M})"}},
+                {"name": "back", "args": {"arm": A}}], 300,
+               f"set the held object down {SIDE_AIM_M} m to the {side.split('_')[0]} of the target (where the target "
+               "is perceived when the place runs), release it, back away")
+
+
+OPERATORS += [
+    _op("stack", {A: "arm", O: "object", C: "object"},
+        ["holding(?arm, ?obj)", "lifted(?obj)", "released(?box)", "on_table(?box)", "flat(?box)",
+         "not on(?box, ?obj)"],
+        ["on(?obj, ?box)", "released(?obj)", "hand_empty(?arm)", "moved(?obj)"],
+        ["holding(?arm, ?obj)", "lifted(?obj)", "over(?obj, _)", "over_place(?obj, _)"],
+        [{"name": "place", "args": {"arm": A, "x": "$x(?box)", "y": "$y(?box)", "z_offset": "$top(?box)"}},
+         {"name": "back", "args": {"arm": A, "rise_m": STACK_RISE_M}}], 300,
+        "set the held object down on top of a flat-topped object on the table (centred on it, its bottom at the "
+        "support's top, where the support is perceived when the place runs), release it, rise, back away"),
+    _beside("put_left_of", "left_of", 1.0),
+    _beside("put_right_of", "right_of", -1.0),
+]
+
 TABLETOP_DOMAIN = Domain(predicates=PREDICATES, operators=OPERATORS,
                          relative_places={"beside_left": (0.0, BESIDE_M), "beside_right": (0.0, -BESIDE_M)},
                          max_grasp_width_m=0.10,
-                         directions={"away": 0.0, "toward": 180.0, "leftward": 90.0, "rightward": -90.0})
+                         directions={"away": 0.0, "toward": 180.0, "leftward": 90.0, "rightward": -90.0},
+                         aliases={"held_up": ["lifted(?x)", "not released(?x)"]})

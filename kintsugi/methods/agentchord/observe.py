@@ -48,10 +48,12 @@ class AxisFree:
     n_points: int
     extremes: Any
     axis: None = None
+    extent: Any = None
+    """Its perceived spans (a cube's footprint, for `within` and `on`)."""
 
 
 def monitored(f: Any) -> Any:
-    return AxisFree(f.centroid, f.n_points, f.extremes) if f.upright is None else f
+    return AxisFree(f.centroid, f.n_points, f.extremes, None, getattr(f, "extent", None)) if f.upright is None else f
 
 
 def with_tracked_top(f: Any, top: Any) -> Any:

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import heapq
 import itertools
+import re
 from collections.abc import Iterable
 from dataclasses import dataclass
 
@@ -79,10 +80,12 @@ def atom_text(a: Atom) -> str:
 def parse_literals(texts: list[str], domain: Domain, binding: dict[str, str] | None = None,
                    where: str = "goal", allow_wild: bool = False) -> tuple[frozenset[Atom], frozenset[Atom]]:
     """Literals -> (positive atoms, negated atoms), parameters filled from `binding`; unknown predicates,
-    wrong arity or unbound parameters raise PlanningError naming the literal."""
+    wrong arity or unbound parameters raise PlanningError naming the literal. A domain alias (`held_up(x)`)
+    stands for its literals (a negated alias is refused: it would be a disjunction)."""
     arity = {p.name: len(p.params) for p in domain.predicates}
     pos: set[Atom] = set()
     neg: set[Atom] = set()
+    texts = expand_aliases(texts, domain, where)
     for text in texts:
         try:
             positive, name, args = parse_atom(text)
@@ -103,6 +106,33 @@ def parse_literals(texts: list[str], domain: Domain, binding: dict[str, str] | N
             raise PlanningError(f"{where}: `_` (any) is allowed in delete effects only, not in {text!r}")
         (pos if positive else neg).add((name, *vals))
     return frozenset(pos), frozenset(neg)
+
+
+def expand_aliases(texts: list[str], domain: Domain, where: str = "goal") -> list[str]:
+    """Literals with each alias (`Domain.aliases`) replaced by the literals it stands for."""
+    if not domain.aliases:
+        return list(texts)
+    out: list[str] = []
+    for text in texts:
+        try:
+            positive, name, args = parse_atom(text)
+        except ValueError as exc:
+            raise PlanningError(f"{where}: {exc}") from None
+        if name not in domain.aliases:
+            out.append(text)
+            continue
+        body = domain.aliases[name]
+        need = list(dict.fromkeys(a for t in body for a in parse_atom(t)[2] if a.startswith("?")))
+        if len(args) != len(need):
+            raise PlanningError(f"{where}: {name} takes {len(need)} argument(s), {text!r} gives {len(args)}")
+        if not positive:
+            raise PlanningError(f"{where}: {text!r}: `not` before {name} (which stands for "
+                                f"{', '.join(body)}) is not a goal this planner can state")
+        for t in body:
+            for p, a in zip(need, args):
+                t = re.sub(rf"\{p}\b", a, t)
+            out.append(t)
+    return out
 
 
 def ground(domain: Domain, arms: list[str], objects: list[str], places: list[str] = ()) -> list[GroundOp]:

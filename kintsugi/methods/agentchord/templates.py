@@ -10,7 +10,7 @@ from kintsugi.methods.agentchord.facts import head_yaw_deg, wrap_deg
 from kintsugi.methods.agentchord.symbolic import Atom, GroundOp, PlanningError
 from kintsugi.methods.agentchord.types import Domain, SeenObject
 
-_FN = re.compile(r"^\$(x|y|z|hy|nhy|rx|ry|yaw|mirror|thin)\(\s*(\?[A-Za-z0-9_]+)\s*(?:,\s*(-?[0-9.eE+-]+)\s*)?\)$")
+_FN = re.compile(r"^\$(x|y|z|top|hy|nhy|rx|ry|yaw|mirror|thin)\(\s*(\?[A-Za-z0-9_]+)\s*(?:,\s*(-?[0-9.eE+-]+)\s*)?\)$")
 _FN2 = re.compile(r"^\$(dx|dy|turn)\(\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*,\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*\)$")
 
 
@@ -18,7 +18,8 @@ def fill(value: Any, binding: dict[str, str], seen: dict[str, SeenObject], where
     """Instantiate a template: `?p` -> its value, `$x(?obj[, d])` -> the object's perceived centroid x (y, z)
     plus d, `$hy(?obj, d)` / `$nhy` -> +/- (half its perceived y extent + d), `$rx(?place)` / `$ry` -> the
     region's centre, `$dx(?obj, ?place)` / `$dy` -> region centre minus the object's centroid, `$turn(?obj,
-    ?dir)` -> the turn about the vertical bringing the object's head to the direction, `$yaw(?dir)` -> the
+    ?dir)` -> the turn about the vertical bringing the object's head to the direction, `$top(?obj, d)` -> its
+    perceived top's height plus d (no lower than 0), `$yaw(?dir)` -> the
     direction's yaw (degrees), `$thin(?obj, d)` -> its thinnest perceived span plus d, `$mirror(?arm, v)` -> v
     for the right arm, -v for the left; lists and dicts
     recursively. `where`: place -> (x, y)."""
@@ -60,6 +61,10 @@ def fill(value: Any, binding: dict[str, str], seen: dict[str, SeenObject], where
             return round(min(obj.extent) + d, 4)
         half = obj.extent[1] / 2.0 + d
         return round(half if fn == "hy" else -half, 4)
+    if fn == "top":
+        if obj is None or obj.top_z is None:
+            raise PlanningError(f"template {value!r}: object {arg!r} has no perceived top")
+        return round(max(0.0, float(obj.top_z) + d), 4)
     if obj is None or obj.centroid is None:
         raise PlanningError(f"template {value!r}: object {arg!r} was not perceived, so its position is unknown")
     return round(float(obj.centroid["xyz".index(fn)]) + d, 4)

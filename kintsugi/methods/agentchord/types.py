@@ -106,6 +106,16 @@ class Domain(StrictModel):
     """One gripper's widest opening: an object narrower than this (its smaller horizontal extent) is `narrow`."""
     directions: dict[str, float] = Field(default_factory=dict, max_length=16)
     """Direction names a heading goal may use -> yaw in degrees (0 = +x, away from the robot)."""
+    aliases: dict[str, list[Literal_]] = Field(default_factory=dict, max_length=16)
+    """Goal words that stand for a conjunction of the domain's literals, its parameters (`?x`, ...) in order of
+    appearance for the arguments: `held_up(x)` -> `lifted(x)`, `not released(x)` (in a hand, clear of the table)."""
+
+    @field_validator("aliases")
+    @classmethod
+    def _alias_literals(cls, v: dict[str, list[str]]) -> dict[str, list[str]]:
+        for texts in v.values():
+            _atoms(texts)
+        return v
 
 
 class SeenObject(StrictModel):

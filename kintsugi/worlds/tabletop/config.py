@@ -7,6 +7,7 @@ World frame: the table top is the plane z = 0, the robot stands at the back edge
 
 from __future__ import annotations
 
+import re
 from typing import Literal
 
 from pydantic import Field, field_validator, model_validator
@@ -66,11 +67,26 @@ class RobotSection(StrictModel):
         return self
 
 
+Primitive = Literal["box", "cylinder", "sphere", "capsule"]
+COLOURS: dict[str, tuple[float, float, float, float]] = {
+    "red": (0.85, 0.2, 0.2, 1.0), "green": (0.25, 0.7, 0.3, 1.0), "blue": (0.2, 0.35, 0.85, 1.0),
+    "yellow": (0.9, 0.8, 0.2, 1.0), "orange": (0.95, 0.55, 0.15, 1.0), "purple": (0.55, 0.3, 0.75, 1.0),
+    "white": (0.92, 0.92, 0.9, 1.0), "black": (0.12, 0.12, 0.12, 1.0), "grey": (0.6, 0.6, 0.6, 1.0),
+    "brown": (0.5, 0.33, 0.2, 1.0)}
+"""Colour names a task may give an object (its `colour`), as the instruction names them ("the red block")."""
+
+
 class ObjectSection(StrictModel):
-    """One object: its size (meaning depends on the kind), mass, friction and where it may start."""
+    """One object: its shape, size, mass, friction, colour and where it may start.
+
+    The built-in objects (bottle, cup, plate, ...) have geometry of their own and leave `shape` unset. An
+    object a task declares gives `shape`, one primitive: `box` (size: half-extents x, y, z), `cylinder`
+    (radius, half-height, -), `sphere` (radius, -, -) or `capsule` (radius, half-length of its straight part,
+    -), lying with its axis vertical; `wall_m` makes a box or cylinder an open container (a bin, a bowl) with
+    walls and floor this thick."""
 
     size_m: Vec3
-    """cylinder-like: (radius, half-height, wall); box-like: half-extents (x, y, z)."""
+    """Built-in cylinder-like: (radius, half-height, wall); box-like: half-extents (x, y, z); see above."""
     mass_kg: float = Field(gt=0)
     friction: float = Field(0.8, gt=0)
     rgba: tuple[float, float, float, float] = (0.6, 0.6, 0.6, 1.0)
@@ -78,6 +94,28 @@ class ObjectSection(StrictModel):
     y_m: Range
     yaw_deg: Range = (0.0, 0.0)
     """Start pose ranges; the `none` condition uses each range's midpoint."""
+    shape: Primitive | None = None
+    """The primitive of an object a task declares; None: a built-in object's own geometry."""
+    kind: str | None = Field(None, pattern=r"^[a-z][a-z_]*$")
+    """What it is, as an instruction names it ("block", "ball", "bowl"); None: its name."""
+    colour: str | None = None
+    """A colour name from `COLOURS` (sets `rgba`), as an instruction names it; None: `rgba` as given."""
+    wall_m: float | None = Field(None, gt=0.0, le=0.05)
+
+    @model_validator(mode="after")
+    def _declared(self) -> "ObjectSection":
+        if self.colour is not None:
+            if self.colour not in COLOURS:
+                raise ValueError(f"colour {self.colour!r} is not one of {', '.join(COLOURS)}")
+            object.__setattr__(self, "rgba", COLOURS[self.colour])
+        if self.shape is None and (self.wall_m is not None):
+            raise ValueError("wall_m needs a declared shape (box or cylinder)")
+        if self.wall_m is not None and self.shape not in ("box", "cylinder"):
+            raise ValueError(f"wall_m (an open container) needs a box or cylinder, not a {self.shape}")
+        if min(self.size_m[:1]) <= 0 or (self.shape == "box" and min(self.size_m) <= 0) or (
+                self.shape in ("cylinder", "capsule") and self.size_m[1] <= 0):
+            raise ValueError(f"size_m {self.size_m} has a non-positive dimension this shape needs")
+        return self
 
 
 def _obj(size, mass, friction, rgba, x, y, yaw=(0.0, 0.0)) -> ObjectSection:  # noqa: ANN001
@@ -103,6 +141,7 @@ class ObjectsSection(StrictModel):
 
 
 OBJECT_KINDS = tuple(ObjectsSection.model_fields)
+"""The built-in objects; a task declares more of its own (`TaskSpec.declared`)."""
 
 
 class Region(StrictModel):
@@ -125,8 +164,8 @@ class Region(StrictModel):
     @field_validator("relative_to")
     @classmethod
     def _an_object(cls, v: str | None) -> str | None:
-        if v is not None and v not in OBJECT_KINDS:
-            raise ValueError(f"{v!r} is not an object; known: {', '.join(OBJECT_KINDS)}")
+        if v is not None and not re.fullmatch(r"[a-z][a-z0-9_]*", v):
+            raise ValueError(f"{v!r} is not an object name")
         return v
 
 

@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass
 from typing import Literal
 
+from kintsugi.core.errors import ConfigError
 from kintsugi.perception.features import Primitive
 from kintsugi.worlds.tabletop.arm_model import f
 from kintsugi.worlds.tabletop.config import ObjectSection, ObjectsSection
@@ -29,7 +30,7 @@ CAP_RGBA = (0.9, 0.9, 0.9, 1.0)
 class Shape:
     """An object's known geometry, in its body frame (origin at the centre, z up)."""
 
-    kind: Literal["cylinder", "box"]
+    kind: Literal["cylinder", "box", "sphere"]
     radius: float = 0.0
     half_height: float = 0.0
     half_extents: tuple[float, float, float] = (0.0, 0.0, 0.0)
@@ -48,16 +49,54 @@ class Shape:
             return Primitive()
         if self.kind == "cylinder":
             return Primitive.cylinder(self.radius, self.half_height, wall=self.wall)
+        if self.kind == "sphere":
+            return Primitive(kind="sphere", radius=self.radius)
         return Primitive.box(*self.half_extents, wall=self.wall)
 
     @property
     def rest_height(self) -> float:
         """Height of the body origin above the table when it stands upright."""
+        if self.kind == "sphere":
+            return self.radius
         return self.half_height if self.kind == "cylinder" else self.half_extents[2]
 
 
+BUILT_IN = ("bottle", "cup", "plate", "capsule", "fork", "spoon", "tray", "block")
+"""Objects with geometry of their own; any other object declares its `shape`."""
+
+
+def section(kind: str, objects: ObjectsSection) -> ObjectSection:
+    """The object's settings; ConfigError naming the objects configured when there is none."""
+    o = getattr(objects, kind, None)
+    if not isinstance(o, ObjectSection):
+        known = ", ".join(type(objects).model_fields)
+        raise ConfigError(f"no object {kind!r} is configured; objects: {known} (a task declares its own in "
+                          "TaskSpec.declared)")
+    return o
+
+
+def declared_shape(o: ObjectSection) -> Shape:
+    """The shape of an object a task declares (`ObjectSection.shape`)."""
+    s = o.size_m
+    if o.shape == "sphere":
+        return Shape("sphere", radius=s[0], half_extents=(s[0], s[0], s[0]))
+    if o.shape == "capsule":  # perception fits it as the cylinder it nearly is
+        return Shape("cylinder", radius=s[0], half_height=s[1] + s[0], grasp="side_if_upright")
+    if o.shape == "cylinder":
+        return Shape("cylinder", radius=s[0], half_height=s[1], wall=o.wall_m,
+                     grasp="top" if o.wall_m is not None or s[1] < s[0] else "side_if_upright")
+    return Shape("box", half_extents=s, wall=o.wall_m)
+
+
 def shape_of(kind: str, objects: ObjectsSection) -> Shape:
-    s = getattr(objects, kind).size_m
+    o = section(kind, objects)
+    if o.shape is not None:
+        return declared_shape(o)
+    if kind not in BUILT_IN:
+        raise ConfigError(f"object {kind!r} declares no shape; give objects.{kind}.shape (box, cylinder, sphere "
+                          "or capsule): only the built-in objects have geometry of their own "
+                          f"({', '.join(BUILT_IN)})")
+    s = o.size_m
     if kind in ("bottle", "cup"):
         return Shape("cylinder", radius=s[0], half_height=s[1], grasp="side_if_upright",
                      wall=s[2] if kind == "cup" else None, cap=kind == "bottle")
@@ -78,8 +117,10 @@ flat-sided ones keep condim 3, which is cheaper."""
 
 def _geoms(kind: str, o: ObjectSection) -> list[str]:
     s, rgba, m = o.size_m, f(*o.rgba), o.mass_kg
-    condim = 6 if kind in ROLLING else 3
+    condim = 6 if kind in ROLLING or (o.shape is not None and o.shape != "box") else 3
     common = f'rgba="{rgba}" friction="{o.friction:.6g} 0.005 0.0001" condim="{condim}"'
+    if o.shape is not None:
+        return _declared_geoms(kind, o, common)
     if kind == "capsule":
         # Stacked slices: a top-down pad (a vertical capsule) parallel to one cylinder's side gets
         # a single contact anywhere along it, often at opposite rims on the two sides, and the
@@ -141,10 +182,40 @@ def _geoms(kind: str, o: ObjectSection) -> list[str]:
     return [f'<geom name="{kind}_body" type="box" size="{f(*s)}" mass="{m:.6g}" {common}/>']
 
 
+def _declared_geoms(name: str, o: ObjectSection, common: str) -> list[str]:
+    """One primitive geom; an open container (`wall_m`): a floor and walls (a box's four, a cylinder's ring of
+    segments), the floor as thick as the walls."""
+    s, m, w = o.size_m, o.mass_kg, o.wall_m
+    if w is None:
+        size = {"box": f(*s), "cylinder": f(s[0], s[1]), "sphere": f(s[0]), "capsule": f(s[0], s[1])}[o.shape]
+        return [f'<geom name="{name}_body" type="{o.shape}" size="{size}" mass="{m:.6g}" {common}/>']
+    if o.shape == "box":
+        hx, hy, hz = s
+        out = [f'<geom name="{name}_floor" type="box" size="{f(hx, hy, w / 2)}" pos="0 0 {-hz + w / 2:.6g}" '
+               f'mass="{0.4 * m:.6g}" {common}/>']
+        wz, z = hz - w / 2, w / 2
+        for side, size, pos in (("front", (w / 2, hy, wz), (hx - w / 2, 0, z)), ("back", (w / 2, hy, wz), (-hx + w / 2, 0, z)),
+                                ("left", (hx, w / 2, wz), (0, hy - w / 2, z)), ("right", (hx, w / 2, wz), (0, -hy + w / 2, z))):
+            out.append(f'<geom name="{name}_wall_{side}" type="box" size="{f(*size)}" pos="{f(*pos)}" '
+                       f'mass="{0.15 * m:.6g}" {common}/>')
+        return out
+    r, hh = s[0], s[1]
+    out = [f'<geom name="{name}_floor" type="cylinder" size="{f(r, w / 2)}" pos="0 0 {-hh + w / 2:.6g}" '
+           f'mass="{0.3 * m:.6g}" {common}/>']
+    rm = r - w / 2
+    half_w = rm * math.tan(math.pi / CUP_SEGMENTS) + 0.0015
+    for k in range(CUP_SEGMENTS):
+        a = 2 * math.pi * k / CUP_SEGMENTS
+        out.append(f'<geom name="{name}_wall{k}" type="box" size="{f(w / 2, half_w, hh - w / 2)}" '
+                   f'pos="{f(rm * math.cos(a), rm * math.sin(a), w / 2)}" euler="0 0 {a:.6g}" '
+                   f'mass="{0.7 * m / CUP_SEGMENTS:.6g}" {common}/>')
+    return out
+
+
 def object_xml(kind: str, objects: ObjectsSection, extra: str = "") -> str:
     """A free body resting upright at the origin of the table; the world sets its start pose.
     `extra`: more geoms riding with it (regions painted beside it)."""
-    o = getattr(objects, kind)
+    o = section(kind, objects)
     shape = shape_of(kind, objects)
     sites = ""
     if kind == "bottle":

@@ -1,6 +1,9 @@
-"""What a tabletop task declares: its objects, instruction, goal predicates, scoring and script.
+"""What a tabletop task declares: its objects, regions, instruction, goal predicates, scoring and script.
 
-A task file (e.g. pour_single.py) builds one `TaskSpec`; task.py runs any spec. Goal
+A task file (e.g. pour_single.py, stack_blocks.py) builds one `TaskSpec`; task.py runs any spec. Objects
+beyond the built-in ones (bottle, cup, ...) and regions are declared in the spec itself (`declared`,
+`regions`): they become the task's own config sections, so `--set objects.red_block.mass_kg=0.2` and
+`kintsugi config <task>` see them, and no shared config changes. Goal
 predicates are text a planner or reasoner reads (`poured(bottle, cup)`); the
 `Scorer` checks the same goal on ground truth, watching the world every control
 tick (for goals about history, like "was tilted over the cup") and at the end.
@@ -9,13 +12,13 @@ tick (for goals about history, like "was tilted over the cup") and at the end.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
-from typing import Any, Callable, Protocol
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping, Protocol
 
 import numpy as np
 
 from kintsugi.core.config import StrictModel
-from kintsugi.worlds.tabletop.config import TabletopConfig
+from kintsugi.worlds.tabletop.config import ObjectSection, Region, TabletopConfig
 from kintsugi.worlds.tabletop.world import GroundTruth, TabletopWorld
 
 
@@ -47,6 +50,12 @@ class TaskSpec:
     """`shift` condition: the object slid and the window of action indices (0-based) it happens in."""
     knock: tuple[str, tuple[int, int]] | None = None
     """`knock` condition: the standing object pushed over, and its action window; None: no such condition."""
+    declared: Mapping[str, ObjectSection] = field(default_factory=dict)
+    """Objects of this task's own (name -> shape, size, mass, friction, colour, start ranges); each is also
+    listed in `objects`."""
+    regions: Mapping[str, Region] = field(default_factory=dict)
+    """Regions of this task's own (name -> centre, half-extents, `relative_to`), beside the shared ones;
+    those it uses are listed in `targets`."""
 
 
 # --- ground-truth predicates shared by the tasks' scorers ------------------------

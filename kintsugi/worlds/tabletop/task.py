@@ -79,6 +79,8 @@ class TabletopTask(Task):
         self.spec = spec
         self.name = spec.name
         self.description = spec.description
+        self.config_type = task_config_type(spec, type(self).config_type)
+        """The task's own config: the shared sections plus the objects and regions its spec declares."""
         missing = {"shift": spec.shift, "knock": spec.knock}
         self.conditions = {k: v for k, v in CONDITIONS.items() if k not in missing or missing[k] is not None}
         """`shift` / `knock` only where the task names an object for them."""
@@ -116,6 +118,42 @@ class TabletopTask(Task):
     def episode(self, cfg: TabletopConfig, variant: str, condition: str, seed: int,
                 video: bool = False) -> TabletopEpisode:
         return TabletopEpisode(self, cfg, condition, seed, video)
+
+
+def task_config_type(spec: TaskSpec, base: type[TabletopConfig] = TabletopConfig) -> type[TabletopConfig]:
+    """`base` with the spec's declared objects and regions as defaults of its `objects` and `targets`
+    sections (the same class for the same spec: records and workers rebuild it by name). A declared name
+    that clashes with a built-in object, or an object in `objects` that is neither built in nor declared,
+    is a ConfigError naming it."""
+    from pydantic import create_model
+
+    from kintsugi.worlds.tabletop.config import ObjectSection, ObjectsSection, Region
+    from kintsugi.worlds.tabletop.objects import BUILT_IN
+
+    clash = sorted(set(spec.declared) & set(ObjectsSection.model_fields))
+    if clash:
+        raise ConfigError(f"task {spec.name}: declared object {clash[0]!r} is a built-in object's name; rename it")
+    unknown = [o for o in spec.objects if o not in spec.declared and o not in BUILT_IN]
+    if unknown:
+        raise ConfigError(f"task {spec.name}: object {unknown[0]!r} is neither built in ({', '.join(BUILT_IN)}) "
+                          "nor declared in TaskSpec.declared")
+    stray = sorted(set(spec.declared) - set(spec.objects))
+    if stray:
+        raise ConfigError(f"task {spec.name}: declared object {stray[0]!r} is not in TaskSpec.objects")
+    if not spec.declared and not spec.regions:
+        return base
+    stem = "".join(p.capitalize() for p in spec.name.replace("-", "_").split("_"))
+    cached = globals().get(f"{stem}Config")
+    if cached is not None and getattr(cached, "_spec_name", None) == spec.name:
+        return cached
+    objects = create_model(f"{stem}Objects", __base__=ObjectsSection, __module__=__name__,
+                           **{n: (ObjectSection, o) for n, o in spec.declared.items()})
+    targets = {**base.model_fields["targets"].default, **spec.regions}
+    cfg = create_model(f"{stem}Config", __base__=base, __module__=__name__,
+                       objects=(objects, objects()), targets=(dict[str, Region], targets))
+    cfg._spec_name = spec.name
+    globals()[objects.__name__], globals()[cfg.__name__] = objects, cfg  # picklable by name
+    return cfg
 
 
 def expand(entry: object, robot: TabletopRobot) -> list:

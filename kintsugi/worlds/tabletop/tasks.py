@@ -9,9 +9,10 @@ from kintsugi.worlds.tabletop.handover_block import SPEC as HANDOVER
 from kintsugi.worlds.tabletop.pour_dual import SPEC as POUR_DUAL
 from kintsugi.worlds.tabletop.pour_single import SPEC as POUR_SINGLE
 from kintsugi.worlds.tabletop.rearrange_table import SPEC as REARRANGE
+from kintsugi.worlds.tabletop.stack_blocks import SPEC as STACK_BLOCKS
 from kintsugi.worlds.tabletop.task import register
 
-SPECS = (POUR_SINGLE, POUR_DUAL, REARRANGE, HANDOVER, COFFEE)
+SPECS = (POUR_SINGLE, POUR_DUAL, REARRANGE, HANDOVER, COFFEE, STACK_BLOCKS)
 for _spec in SPECS:
     register(_spec)
 TASKS.register(FOLD_TOWEL.name, FOLD_TOWEL.description, tags=("system-b", "tabletop"))(lambda: FoldTowelTask(FOLD_TOWEL))
