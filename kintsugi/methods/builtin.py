@@ -3,5 +3,5 @@
 import importlib
 
 for _module in ("recovery.baseline", "recovery.method", "scripted", "expert.method", "agentchord.method",
-                "agentchord.replanning", "coral"):
+                "agentchord.replanning", "coral", "policy"):
     importlib.import_module(f"kintsugi.methods.{_module}")

@@ -1,0 +1,114 @@
+"""The step-level API: one control period at a time, over the same robot a method drives.
+
+A `Driver` wraps one family's robot (peg, tabletop, contact) and offers what a policy needs at
+the control rate: `observe()` (the robot's own sensors and cameras as named arrays), `apply(action)`
+(the low-level command, clipped to its documented bounds), `tick()` (one control period of the world's
+own stepping, with its watchers: scorers and disturbances run exactly as under any method), and
+`command()` (the command in force, what a recorder logs). It reads the robot's sensors and writes its
+actuators; it never reads ground truth.
+
+`Feature` describes one observation entry (shape, bounds, dtype, unit) so that a Gymnasium space, a
+LeRobot feature list and a robomimic key set are all built from one description.
+"""
+
+from __future__ import annotations
+
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+
+from kintsugi.core.errors import KintsugiError
+
+
+class DriverError(KintsugiError):
+    """The robot cannot be driven step by step (an unknown family, a bad action)."""
+
+
+@dataclass(frozen=True)
+class Feature:
+    shape: tuple[int, ...]
+    low: float
+    high: float
+    dtype: str
+    unit: str
+    names: tuple[str, ...] | None = None
+    image: bool = False
+
+
+class Driver(ABC):
+    family: str
+    action_names: tuple[str, ...]
+    action_unit: str
+    control_hz: float
+
+    def __init__(self) -> None:
+        self.steps = 0
+        """Control periods this driver ran."""
+        self._last_quat: dict[str, np.ndarray] = {}
+
+    # --- the action ---------------------------------------------------------------------------
+    @property
+    @abstractmethod
+    def action_low(self) -> np.ndarray: ...
+
+    @property
+    @abstractmethod
+    def action_high(self) -> np.ndarray: ...
+
+    def clip(self, action: Any) -> np.ndarray:
+        a = np.asarray(action, dtype=np.float64).reshape(-1)
+        if a.shape != (len(self.action_names),):
+            raise DriverError(f"a {self.family} action has {len(self.action_names)} values "
+                              f"({', '.join(self.action_names)}), not {a.size}")
+        if not np.all(np.isfinite(a)):
+            raise DriverError(f"a {self.family} action must be finite, got {a.tolist()}")
+        return np.clip(a, self.action_low, self.action_high)
+
+    @abstractmethod
+    def apply(self, action: Any) -> None:
+        """Send one command (clipped to the bounds); it stays in force until the next."""
+
+    @abstractmethod
+    def tick(self) -> None:
+        """One control period of the world, watchers included."""
+
+    @abstractmethod
+    def command(self) -> np.ndarray:
+        """The command in force, as an action vector (what `apply` would take to send it again)."""
+
+    # --- the observation ----------------------------------------------------------------------
+    @abstractmethod
+    def features(self, images: bool = True) -> dict[str, Feature]: ...
+
+    @abstractmethod
+    def observe(self, images: bool = True) -> dict[str, np.ndarray]: ...
+
+    @abstractmethod
+    def render(self) -> np.ndarray:
+        """One RGB frame of the robot's camera(s), for a viewer or a video."""
+
+    @abstractmethod
+    def record_ticks(self, on_tick: Callable[[np.ndarray], None]) -> None:
+        """Have `on_tick(command)` called before every control period the world runs, whoever commands it
+        (a method's skills or actions): how a trial's low-level trajectory is logged for replay."""
+
+    @property
+    @abstractmethod
+    def physics_steps(self) -> int: ...
+
+    @property
+    @abstractmethod
+    def sim_time(self) -> float: ...
+
+    def continuous(self, key: str, quat: np.ndarray, w_index: int) -> np.ndarray:
+        """`quat` on the hemisphere of the last one seen under `key` (q and -q are one rotation; a sign flip
+        between frames ruins normalisation statistics and regression targets). The first is given w >= 0
+        (`w_index`: where the scalar part is, 3 for x, y, z, w and 0 for w, x, y, z)."""
+        q = np.asarray(quat, dtype=np.float64)
+        ref = self._last_quat.get(key)
+        if (ref is None and q[w_index] < 0) or (ref is not None and q @ ref < 0):
+            q = -q
+        self._last_quat[key] = q
+        return q
