@@ -8,6 +8,7 @@ from typing import Any
 
 import numpy as np
 
+from kintsugi.methods.agentchord.aim import relation_call
 from kintsugi.methods.agentchord.keyframes import TabletopKeyframes
 from kintsugi.methods.agentchord.observe import ARMS
 from kintsugi.methods.agentchord.tops import Heads, Tops
@@ -73,7 +74,7 @@ class EdgeSynthesis:
             if call.get("yaw_deg") is None:
                 call = self._clear_grasp_call(call)
         if name == "place":
-            call = self._place_call(call)
+            call = relation_call(self.graph.node(edge.target), self.robot, self.seen, self._place_call(call))
         return call
 
     def _place_call(self, call: dict) -> dict:
