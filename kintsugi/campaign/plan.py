@@ -124,6 +124,30 @@ def task_defaults(task: str, plugins: list[str] | tuple[str, ...] = ()) -> tuple
             tuple(getattr(made, "default_conditions", None) or conditions))
 
 
+DEFAULT_TRIALS = 30
+"""Trials per cell when neither the command nor a suite names a count."""
+
+
+def campaign_for(task: str, methods: list[str] | None = None, variants: list[str] | None = None,
+                 conditions: list[str] | None = None, trials: int | None = None, suite: str | None = None,
+                 **fields: Any) -> CampaignConfig:
+    """A validated campaign with the defaults `kintsugi bench`, `kintsugi run` and `kintsugi.bench` share.
+
+    What is not given comes from the named `suite` (its overrides go under `fields["overrides"]`), else from
+    the task: its own system's method, its first variant, its default conditions, `DEFAULT_TRIALS`."""
+    plugins = list(fields.pop("plugins", None) or [])
+    named = suite_of(task, suite, plugins) if suite else None
+    method, variant, default_conditions = task_defaults(task, plugins)
+    overrides = (dict(named.overrides) if named else {}) | dict(fields.pop("overrides", None) or {})
+    return build_config(
+        task=task,
+        methods=list(methods) if methods else list(named.methods) if named else [method],
+        variants=list(variants) if variants else list(named.shapes) if named else [variant],
+        conditions=list(conditions) if conditions else list(named.conditions) if named else list(default_conditions),
+        trials=trials or (named.trials if named else DEFAULT_TRIALS), overrides=overrides, plugins=plugins,
+        **fields)
+
+
 def suite_of(task: str, name: str, plugins: list[str] | tuple[str, ...] = ()) -> Any:
     """A task's named campaign (methods, variants, conditions, trials, overrides, companion).
 

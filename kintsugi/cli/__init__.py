@@ -8,25 +8,13 @@ from typing import Annotated, Literal, Optional
 
 import typer
 from rich.markup import escape
-from rich.table import Table
 
+from kintsugi.cli.app import app
 from kintsugi.core.errors import KintsugiError
-
-app = typer.Typer(add_completion=False, no_args_is_help=True,
-                  help="kintsugi: resilient robot manipulation with reasoned checks and recovery, on MuJoCo.")
-
 from kintsugi.cli.options import (  # noqa: F401 - _record_path is part of what tests and users import from here
     BaseUrlOpt, KeyEnvOpt, ModelOpt, PluginOpt, ReasonerOpt, SetOpt, StructuredOpt, _csv, _echo, _fail, _overrides,
-    _plugins, _reasoner, _record_path, _version, console, err_console,
+    _plugins, _reasoner, _record_path, console, err_console, ConfigOpt,
 )
-
-
-@app.callback()
-def _main(
-    version: Annotated[bool, typer.Option("--version", callback=_version, is_eager=True,
-                                          help="print the installed version and exit")] = False,
-) -> None:
-    """kintsugi: resilient robot manipulation with reasoned checks and recovery, on MuJoCo."""
 
 
 @app.command()
@@ -45,8 +33,9 @@ def run(
                                                   "seed gives the same trial")] = 0,
     video: Annotated[Optional[Path], typer.Option(help="write an .mp4 or .gif of the scene camera")] = None,
     record: Annotated[Optional[Path], typer.Option(
-        help="trial record .json (default: runs/<key, / as __>__<reasoner>[__set-<hash of the --set values>].json)")
-    ] = None,
+        help="trial record .json [default: runs/<task>__<method>__<variant>__<condition>__<seed>, then the "
+             "reasoner when the trial asked it anything and a hash of any --config/--set values]")] = None,
+    config_file: ConfigOpt = None,
     set_: SetOpt = None,
     reasoner: ReasonerOpt = "embedded",
     model: ModelOpt = None,
@@ -60,20 +49,20 @@ def run(
     Exits 1 when the trial recorded an error (e.g. an unreachable endpoint); the record is saved first.
     """
     plugin = _plugins(plugin)
-    from kintsugi.campaign.plan import build_config, expand, task_defaults
+    from kintsugi.campaign.plan import campaign_for, expand, task_defaults
     from kintsugi.campaign.runner import first_line
     from kintsugi.core.outputs import check_output_file
     from kintsugi.core.runner import failed_record, run_trial
     from kintsugi.core.video import check_video_path
 
     try:  # every name, setting and output path is checked before the trial spends anything
-        default_method, default_variant, default_conditions = task_defaults(task, plugin)
-        cfg = build_config(task=task, methods=[method or default_method], variants=[shape or default_variant],
-                           conditions=[condition or default_conditions[0]], trials=1,
-                           base_seed=seed, overrides=_overrides(set_), plugins=plugin,
+        one = [condition] if condition else [task_defaults(task, plugin)[2][0]]  # the first one bench runs
+        cfg = campaign_for(task, [method] if method else None, [shape] if shape else None, one, trials=1,
+                           base_seed=seed, overrides=_overrides(set_, config_file), plugins=plugin,
                            reasoner=_reasoner(reasoner, model, base_url, api_key_env, structured_output))
         spec = expand(cfg)[0].model_copy(update={"video": str(check_video_path(video)) if video else None})
         path = check_output_file(record or _record_path(spec), "record", (".json",))
+        check_output_file(record or _record_path(spec, reasoned=False), "record", (".json",))
     except KintsugiError as exc:
         _fail(exc)
         return
@@ -84,6 +73,7 @@ def run(
         result = failed_record(spec, f"{type(exc).__name__}: {exc}")
     except Exception as exc:  # noqa: BLE001 - a bug in a task: record it with its traceback, do not crash
         result = failed_record(spec, f"{type(exc).__name__}: {exc}\n{traceback.format_exc(limit=4)}")
+    path = record or _record_path(spec, reasoned=result.reasoning_calls > 0)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
         path.write_text(result.model_dump_json(indent=2))
@@ -106,7 +96,7 @@ def bench(
         help="a named campaign of the task (e.g. peg-insertion's `stretch`): its methods, variants, conditions, "
              "trials and config; options given here go on top")] = None,
     methods: Annotated[Optional[str], typer.Option(
-        help="comma-separated methods [default: the task's reference method]")] = None,
+        help="comma-separated methods [default: the task's own system's method, as for `kintsugi run`]")] = None,
     shapes: Annotated[Optional[str], typer.Option(
         "--shapes", "--variants", help="comma-separated variants [default: the task's first, e.g. round]")] = None,
     conditions: Annotated[Optional[str], typer.Option(
@@ -123,6 +113,7 @@ def bench(
                                                        "so methods meet the same random draws")] = 0,
     videos_per_cell: Annotated[int, typer.Option(min=0, help="record videos of the first N trials per cell")] = 0,
     plugin: PluginOpt = None,
+    config_file: ConfigOpt = None,
     set_: SetOpt = None,
     reasoner: ReasonerOpt = "embedded",
     model: ModelOpt = None,
@@ -136,7 +127,7 @@ def bench(
     Plugin modules are imported here and in every worker (the campaign's `plugins`).
     """
     plugin = _plugins(plugin)
-    from kintsugi.campaign.plan import build_config, suite_of, task_defaults
+    from kintsugi.campaign.plan import campaign_for, suite_of
     from kintsugi.campaign.render import print_tables
     from kintsugi.campaign.report import write_report
     from kintsugi.campaign.runner import error_summary, run_campaign
@@ -145,17 +136,11 @@ def bench(
     try:
         named = suite_of(task, suite, plugin or []) if suite else None
         out = out or Path("runs") / (suite or "campaign")
-        default_method, default_variant, default_conditions = task_defaults(task, plugin or [])
-        cfg = build_config(
-            task=task,
-            methods=_csv(methods) if methods else list(named.methods) if named else [default_method],
-            variants=_csv(shapes) if shapes else list(named.shapes) if named else [default_variant],
-            conditions=(_csv(conditions) if conditions else list(named.conditions) if named
-                        else list(default_conditions)),
-            trials=trials or (named.trials if named else 30), base_seed=base_seed,
-            overrides=(dict(named.overrides) if named else {}) | _overrides(set_), plugins=plugin or [],
-            reasoner=_reasoner(reasoner, model, base_url, api_key_env, structured_output),
-            videos_per_cell=videos_per_cell)
+        cfg = campaign_for(task, _csv(methods) if methods else None, _csv(shapes) if shapes else None,
+                           _csv(conditions) if conditions else None, trials, suite, base_seed=base_seed,
+                           overrides=_overrides(set_, config_file), plugins=plugin or [],
+                           reasoner=_reasoner(reasoner, model, base_url, api_key_env, structured_output),
+                           videos_per_cell=videos_per_cell)
         records = run_campaign(cfg, out, workers=workers, executor=executor, trial_timeout_s=trial_timeout)
         print_tables(tables_for(cfg.task, records, cfg), console)
         md, html = write_report(out, cfg, records)
@@ -196,93 +181,6 @@ def report(out: Annotated[Path, typer.Argument(help="campaign directory")], plug
     errors = error_summary(records)
     if errors:
         err_console.print(f"[yellow]note:[/yellow] {escape(errors)}")
-
-
-def _list(title: str, registry, prefix: str | None = None) -> None:  # noqa: ANN001 - a Registry
-    """A registry as a table; with `prefix`, each entry's settings as `--set <prefix>.<key>` defaults."""
-    table = Table(title=title)
-    table.add_column("name", style="bold")
-    table.add_column("description")
-    table.add_column("tags", style="dim")
-    if prefix:
-        table.add_column(f"settings (--set {prefix}.<key>=...)")
-    for entry in registry:
-        row = [escape(entry.name), escape(entry.description), escape(", ".join(sorted(entry.tags)))]
-        if prefix:
-            fields = getattr(entry, "config", None)
-            defaults = fields().model_dump(mode="json") if fields is not None else {}
-            row.append(escape(", ".join(f"{k}={v}" for k, v in defaults.items()) or "—"))
-        table.add_row(*row)
-    console.print(table)
-
-
-@app.command()
-def tasks(plugin: PluginOpt = None) -> None:
-    """List registered tasks with their variants and conditions."""
-    _plugins(plugin)
-    from kintsugi.core.plugins import load_builtins
-    from kintsugi.core.registry import TASKS
-
-    load_builtins()
-    _list("tasks", TASKS)
-    for entry in TASKS:
-        t = entry.factory()
-        console.print(f"[bold]{escape(entry.name)}[/bold] variants: {escape(str(getattr(t, 'variants_help', '')))}")
-        conditions = getattr(t, "conditions", {})
-        for name in conditions:
-            text = conditions[name] if isinstance(conditions, dict) else ""
-            console.print(f"  condition [bold]{escape(name)}[/bold]: {escape(text)}")
-
-
-@app.command()
-def methods(plugin: PluginOpt = None) -> None:
-    """List registered methods."""
-    _plugins(plugin)
-    from kintsugi.core.plugins import load_builtins
-    from kintsugi.core.registry import METHODS
-
-    load_builtins()
-    _list("methods", METHODS, prefix="method")
-
-
-@app.command()
-def reasoners(plugin: PluginOpt = None) -> None:
-    """List registered reasoner backends."""
-    _plugins(plugin)
-    from kintsugi.reasoning import REASONERS, load_builtin_backends
-
-    load_builtin_backends()
-    _list("reasoners", REASONERS)
-
-
-@app.command()
-def config(
-    task: Annotated[str, typer.Argument(help="registered task, see `kintsugi tasks`")],
-    method: Annotated[Optional[str], typer.Option(help="also print this method's settings")] = None,
-    set_: SetOpt = None,
-    plugin: PluginOpt = None,
-) -> None:
-    """Print a task's config (and a method's settings) as JSON, with any --set values applied.
-
-    Every key printed can be set with `--set <section>.<key>=value` (`method.<key>` for the method's)."""
-    _plugins(plugin)
-    import json
-
-    from kintsugi.core.plugins import load_builtins
-    from kintsugi.core.registry import TASKS
-    from kintsugi.core.resolve import method_for, split_overrides
-
-    try:
-        load_builtins()
-        made = TASKS.get(task).factory()
-        task_overrides, method_overrides, _ = split_overrides(_overrides(set_), method)
-        out = {"task": made.config(task_overrides).model_dump(mode="json")}
-        if method:
-            out["method"] = method_for(made, method).configure(method_overrides).model_dump(mode="json")
-    except KintsugiError as exc:
-        _fail(exc)
-        return
-    console.print_json(json.dumps(out))
 
 
 @app.command()
@@ -377,6 +275,9 @@ def export(
                          f"{rep.path}"))
     if rep.refused:
         _fail(f"{len(rep.refused)} trials refused: " + "; ".join(f"{k}: {why}" for k, why in rep.refused), code=1)
+
+
+from kintsugi.cli import info  # noqa: E402,F401 - registers tasks, methods, reasoners and config
 
 
 def main() -> None:  # pragma: no cover

@@ -20,7 +20,10 @@ from kintsugi.core.errors import KintsugiError
 console = Console(soft_wrap=True)
 err_console = Console(stderr=True, soft_wrap=True)
 
-SetOpt = Annotated[Optional[list[str]], typer.Option("--set", help="config override key.path=value (repeatable)")]
+SetOpt = Annotated[Optional[list[str]], typer.Option("--set", help="config override key.path=value (repeatable; "
+                                                     "goes on top of --config)")]
+ConfigOpt = Annotated[Optional[Path], typer.Option(
+    "--config", help="YAML (or JSON) settings file in the layout `kintsugi config` prints; --set goes on top")]
 ReasonerOpt = Annotated[str, typer.Option(help="reasoner backend: embedded (offline) or openai")]
 ModelOpt = Annotated[Optional[str], typer.Option(help="model name for the openai backend")]
 BaseUrlOpt = Annotated[Optional[str], typer.Option(help="OpenAI-compatible endpoint (vLLM, Ollama, llama.cpp)")]
@@ -72,11 +75,14 @@ def _reasoner(backend: str, model: str | None, base_url: str | None, key_env: st
                             structured_output=structured_output)
 
 
-def _overrides(sets: list[str] | None) -> dict:
-    """Parse `--set key.path=value`; campaign validation checks them against the task's typed config."""
+def _overrides(sets: list[str] | None, config: Path | None = None) -> dict:
+    """`--config` file settings, then `--set key.path=value` on top; campaign validation checks them all
+    against the task's and methods' typed configs."""
     from kintsugi.core.config import parse_override
+    from kintsugi.core.resolve import load_settings_file
 
-    return dict((".".join(k), v) for k, v in (parse_override(s) for s in sets or []))
+    base = load_settings_file(config) if config is not None else {}
+    return base | dict((".".join(k), v) for k, v in (parse_override(s) for s in sets or []))
 
 
 def _fail(exc: Exception | str, code: int = 2) -> None:
@@ -93,18 +99,21 @@ def _echo(text: str) -> None:
         console.print(escape(text))
 
 
-def _record_path(spec) -> Path:  # noqa: ANN001 - a TrialSpec
-    """runs/<task>__<method>__<variant>__<condition>__<seed>__<reasoner>[__set-<hash>].json: another
-    reasoner (or model) or other `--set` values never overwrite the record of the same trial."""
+def _record_path(spec, reasoned: bool = True) -> Path:  # noqa: ANN001 - a TrialSpec
+    """runs/<task>__<method>__<variant>__<condition>__<seed>[__<reasoner>][__set-<hash>].json.
+
+    The reasoner (and model) is named when the trial asked it anything (`reasoned`); other `--set` or
+    `--config` values add a short hash of the settings, so no record overwrites one made with other settings.
+    """
     r = spec.reasoner
     model = r.model
     if model is None and r.backend == "openai":
         from kintsugi.reasoning.openai_backend import DEFAULT_OPENAI_MODEL
 
         model = DEFAULT_OPENAI_MODEL
-    who = re.sub(r"[^A-Za-z0-9._+-]+", "-", r.backend + (f"-{model}" if model else ""))
+    who = ("__" + re.sub(r"[^A-Za-z0-9._+-]+", "-", r.backend + (f"-{model}" if model else ""))) if reasoned else ""
     settings = ""
     if spec.overrides:
         text = json.dumps(spec.overrides, sort_keys=True, default=str)
         settings = "__set-" + hashlib.sha1(text.encode()).hexdigest()[:8]
-    return Path("runs") / f"{spec.key.replace('/', '__')}__{who}{settings}.json"
+    return Path("runs") / f"{spec.key.replace('/', '__')}{who}{settings}.json"

@@ -101,3 +101,68 @@ def reasoner_settings(settings: ReasonerSettings, overrides: dict[str, Any]) -> 
     load_builtins()
     backend_options(REASONERS.get(out.backend), options)
     return out
+
+
+SETTINGS_SECTIONS = ("task", "method", "methods", "reasoner")
+"""Top-level keys of a settings file: the task's config, every method's (`method`), one method's
+(`methods.<name>`), the reasoner's."""
+
+
+def settings_document(task_name: str, method: str | None, overrides: dict[str, Any]) -> dict[str, Any]:
+    """The full settings of a task (and of `method`, scoped as `methods.<method>`) with `overrides` applied:
+    the layout `kintsugi config` prints and `--config` reads back."""
+    load_builtins()
+    task = TASKS.get(task_name).factory()
+    task_overrides, method_overrides, _ = split_overrides(overrides, method)
+    doc: dict[str, Any] = {"task": task.config(task_overrides).model_dump(mode="json")}
+    if method:
+        check_scoped(overrides, [method])
+        doc["methods"] = {method: method_for(task, method).configure(method_overrides).model_dump(mode="json")}
+    return doc
+
+
+def flatten_settings(doc: Any, source: str = "settings") -> dict[str, Any]:
+    """A settings document (`task:`, `method:`, `methods:`, `reasoner:` sections) as dotted `--set` keys.
+
+    `task.peg.clearance_mm: 1` becomes `peg.clearance_mm`; the other sections keep their prefix. Nested
+    mappings become dotted keys down to their leaves; an empty mapping sets nothing."""
+    if not isinstance(doc, dict):
+        raise ConfigError(f"{source} must be a mapping with sections {', '.join(SETTINGS_SECTIONS)}; "
+                          f"got {type(doc).__name__}")
+    out: dict[str, Any] = {}
+
+    def walk(prefix: str, node: Any) -> None:
+        if isinstance(node, dict):
+            for k, v in node.items():
+                walk(f"{prefix}.{k}" if prefix else str(k), v)
+        elif prefix:
+            out[prefix] = node
+
+    for section, body in doc.items():
+        if section not in SETTINGS_SECTIONS:
+            raise ConfigError(f"{source}: unknown section {section!r}; sections: {', '.join(SETTINGS_SECTIONS)}")
+        if not isinstance(body, dict):
+            raise ConfigError(f"{source}: section {section!r} must be a mapping of settings")
+        walk("" if section == "task" else section, body)
+    return out
+
+
+def load_settings_file(path: Any) -> dict[str, Any]:
+    """A YAML or JSON settings file as dotted overrides (see `flatten_settings`); ConfigError names the problem."""
+    from pathlib import Path
+
+    import yaml
+
+    path = Path(path)
+    try:
+        text = path.read_text()
+    except OSError as exc:
+        raise ConfigError(f"cannot read the settings file {path}: {exc.strerror or exc}") from None
+    try:
+        doc = yaml.safe_load(text)
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}" if mark is not None else ""
+        raise ConfigError(f"the settings file {path} is not valid YAML{where}: "
+                          f"{getattr(exc, 'problem', None) or exc}") from None
+    return flatten_settings(doc or {}, source=str(path))
