@@ -40,6 +40,8 @@ class CallStats:
     attempts: int = 1
     output_mode: str | None = None
     output_note: str | None = None
+    images_sent: int = 0
+    images_withheld: int = 0
 
 
 class CallRecord(StrictModel):
@@ -58,6 +60,10 @@ class CallRecord(StrictModel):
     """How an endpoint enforced the reply format (None for backends without one, e.g. embedded)."""
     output_note: str | None = None
     """Set on the call where the backend fell back from strict to text output, with the reason."""
+    images_sent: int = 0
+    images_withheld: int = 0
+    """Camera images left out of this call's request (`reasoner.options.images=measurements`): the model
+    worked from the checks and measurements alone."""
 
 
 @runtime_checkable
@@ -173,5 +179,7 @@ class RecordingReasoner:
                         attempts=stats.attempts,
                         output_mode=stats.output_mode,
                         output_note=stats.output_note,
+                        images_sent=stats.images_sent,
+                        images_withheld=stats.images_withheld,
                     )
                 )

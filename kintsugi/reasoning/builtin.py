@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 from kintsugi.reasoning import REASONERS
+from kintsugi.reasoning.endpoint_options import OpenAIOptions
 from kintsugi.reasoning.scripted import ScriptedOptions
 
 
@@ -31,6 +32,7 @@ def _scripted(settings: Any, options: ScriptedOptions) -> Any:
     "any OpenAI-compatible chat-completions endpoint (OpenAI, vLLM, Ollama, llama.cpp): "
     "set reasoner.model, reasoner.base_url, and the key in $OPENAI_API_KEY (or reasoner.api_key_env)",
     tags=("network", "vlm"),
+    config=OpenAIOptions,
 )
 def _openai(settings: Any, options: Any) -> Any:
     from kintsugi.reasoning.openai_backend import make_openai_reasoner

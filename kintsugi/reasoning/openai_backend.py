@@ -6,9 +6,15 @@ URLs) the user message; replies are constrained by the reply type's JSON schema,
 or arrive as function calls when the role routes them so (a peg recovery plan:
 one tool per skill). Servers that refuse or ignore those strict options get the
 same requests in text mode (see `structured.py`). Transport retries with backoff
-(429, 5xx, timeouts) are the SDK's own; on top of that a reply that does not
-parse, validate or pass the role's checks is sent back to the model once with
-the error quoted.
+(timeouts, 429, 5xx) happen only where a retry can help (`transport.py`: a refusal
+is never retried); on top of that a reply that does not parse, validate or pass
+the role's checks is sent back to the model once with the error quoted.
+
+Images are sent at most `Role.image_max_px` on their longer side (the model is told
+the scale); with `reasoner.options.images=measurements` none are sent: the model
+works from the checks and measurements the request also carries, and each call's
+record counts the images withheld. `preflight` (`preflight.py`) asks the endpoint
+what it can do before a campaign's first trial.
 """
 
 from __future__ import annotations
@@ -16,6 +22,7 @@ from __future__ import annotations
 import base64
 import json
 import os
+from dataclasses import replace
 from typing import Any
 from urllib.parse import urlparse
 
@@ -24,6 +31,8 @@ from pydantic import BaseModel
 
 from kintsugi.core.errors import ConfigError
 from kintsugi.reasoning.base import CallStats, Check, redact
+from kintsugi.reasoning.images import fit_png
+from kintsugi.reasoning.endpoint_options import OpenAIOptions
 from kintsugi.reasoning.jsontext import BadReply  # noqa: F401 - re-exported
 from kintsugi.reasoning.roles import Role
 from kintsugi.reasoning.structured import (  # noqa: F401 - EndpointError, strict_schema, MAX_ATTEMPTS re-exported
@@ -65,7 +74,8 @@ class OpenAIReasoner:
 
     def __init__(self, *, model: str | None = None, base_url: str | None = None,
                  api_key_env: str = "OPENAI_API_KEY", timeout_s: float = 60.0, max_retries: int = 3,
-                 structured_output: StructuredOutput = "auto", client: OpenAI | None = None) -> None:
+                 structured_output: StructuredOutput = "auto", client: OpenAI | None = None,
+                 options: OpenAIOptions | None = None) -> None:
         if model is None and not _is_openai(base_url):
             raise ConfigError(
                 f"reasoner.model is not set; set it to the model name your server at {base_url} serves"
@@ -73,14 +83,22 @@ class OpenAIReasoner:
         self.model = model or DEFAULT_OPENAI_MODEL
         self.base_url = base_url
         self.timeout_s = timeout_s
+        self.options = options or OpenAIOptions()
         self.client = client or OpenAI(
             base_url=base_url,
             api_key=resolve_api_key(api_key_env, base_url),
             timeout=timeout_s,
-            max_retries=max_retries,
+            max_retries=0,  # `transport.send` retries, and only what a retry can fix
         )
         self.structured = StructuredClient(self.client, self.model, where=base_url or "https://api.openai.com/v1",
-                                           timeout_s=timeout_s, structured_output=structured_output)
+                                           timeout_s=timeout_s, structured_output=structured_output,
+                                           max_retries=max_retries, max_reply_tokens=self.options.max_reply_tokens)
+        self._images = (0, 0)
+
+    @property
+    def sees_images(self) -> bool:
+        """False with `images=measurements`: methods then leave optional camera images out of requests."""
+        return self.options.images == "send"
 
     @property
     def last_stats(self) -> CallStats | None:
@@ -89,6 +107,13 @@ class OpenAIReasoner:
     @last_stats.setter
     def last_stats(self, value: CallStats | None) -> None:
         self.structured.last_stats = value
+
+    def preflight(self, roles: dict[str, list[Role]]) -> list[str]:
+        """Ask the endpoint once what it can do for these roles (by method); raises CapabilityError with one
+        line when it cannot serve them, else returns notes (what was learnt, what will fall back)."""
+        from kintsugi.reasoning.preflight import check_endpoint
+
+        return check_endpoint(self, roles)
 
     def answer(self, role: Role, request: BaseModel, check: Check | None = None) -> BaseModel:
         """The role's system prompt as the system message, its prompt plus the request (images attached) as
@@ -99,31 +124,47 @@ class OpenAIReasoner:
             {"role": "user", "content": self._user_content(role, request)},
         ]
         tools = role.tools(request) if role.tools is not None else None
-        return self.structured.ask(role.name, messages, role.reply, check=check, tools=tools, prompt=role.prompt_path)
+        sent, withheld = self._images
+        try:
+            return self.structured.ask(role.name, messages, role.reply, check=check, tools=tools,
+                                       prompt=role.prompt_path)
+        finally:
+            if self.structured.last_stats is not None:
+                self.structured.last_stats = replace(self.structured.last_stats, images_sent=sent,
+                                                     images_withheld=withheld)
 
     # --- internals ---------------------------------------------------------
     def _user_content(self, role: Role, request: BaseModel) -> str | list[dict[str, Any]]:
         images: list[tuple[str, bytes]] = []
+        withheld: list[str] = []
+        send = self.options.images == "send"
 
         def on_bytes(path: tuple[str, ...], data: bytes) -> str:
+            if not send:
+                withheld.append(".".join(path))
+                return "<image withheld: this endpoint gets measurements only; use the checks and measurements>"
             images.append((".".join(path), data))
             return f"<image {len(images)}, attached below>"
 
         payload = redact(request, on_bytes)
+        self._images = (len(images), len(withheld))
         sections = role.sections(request) if role.sections is not None else ""
         text = f"{role.prompt_text()}\n\n{sections}# Request\n```json\n{json.dumps(payload, indent=2)}\n```"
         if not images:
             return text
         parts: list[dict[str, Any]] = [{"type": "text", "text": text}]
+        limit = min(role.image_max_px, self.options.image_max_px or role.image_max_px)
         for i, (path, data) in enumerate(images, 1):
-            parts.append({"type": "text", "text": f"Image {i} ({path}): {role.image_labels.get(path, path)}"})
-            url = "data:image/png;base64," + base64.b64encode(data).decode("ascii")
+            png, note = fit_png(data, limit)
+            label = f"Image {i} ({path}): {role.image_labels.get(path, path)}" + (f" ({note})" if note else "")
+            parts.append({"type": "text", "text": label})
+            url = "data:image/png;base64," + base64.b64encode(png).decode("ascii")
             parts.append({"type": "image_url", "image_url": {"url": url}})
         return parts
 
 
-def make_openai_reasoner(settings: Any, options: Any = None) -> OpenAIReasoner:
-    """Registry factory: the common ReasonerSettings fields -> OpenAIReasoner (the backend has no options)."""
+def make_openai_reasoner(settings: Any, options: OpenAIOptions | None = None) -> OpenAIReasoner:
+    """Registry factory: the common ReasonerSettings fields and the backend's options -> OpenAIReasoner."""
     return OpenAIReasoner(
         model=settings.model,
         base_url=settings.base_url,
@@ -131,4 +172,5 @@ def make_openai_reasoner(settings: Any, options: Any = None) -> OpenAIReasoner:
         timeout_s=settings.timeout_s,
         max_retries=settings.max_retries,
         structured_output=settings.structured_output,
+        options=options if isinstance(options, OpenAIOptions) else None,
     )

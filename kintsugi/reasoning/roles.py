@@ -70,6 +70,11 @@ class Role:
     """For replies a model endpoint should give as function calls: the tools for this request."""
     image_labels: dict[str, str] = field(default_factory=dict)
     """What each image of the request shows, by its dotted path (`outcome.image_png`), told to a model."""
+    image_max_px: int = 512
+    """The longest side an image needs for this role; larger camera images are scaled down before sending."""
+    sends_images: bool | None = None
+    """Whether the role's requests carry camera images; None: they may whenever the request type has image
+    (bytes) fields. A role whose method never fills them says False, so a text-only endpoint can serve it."""
 
     @property
     def prompt_file(self) -> str:

@@ -10,7 +10,7 @@ pydantic model), so every role shares one transport. Two modes:
   as JSON) is described in the prompt and the reply is parsed tolerantly.
 
 `auto` starts strict and moves an option to text for the rest of the client's
-life when the server refuses it (HTTP 400/422 naming it) or ignores it (a reply
+life when the server refuses it (an HTTP error naming it, whatever the status) or ignores it (a reply
 that is not a bare JSON object, or has no tool call). Both modes share the same
 pydantic validation, the caller's check and one repair round; each call's
 `CallStats` says which mode it used and why it switched.
@@ -19,10 +19,8 @@ pydantic validation, the caller's check and one repair round; each call's
 from __future__ import annotations
 
 import json
-import re
 from typing import Any, Callable, Literal, TypeVar, get_args
 
-import openai
 from openai import OpenAI
 from pydantic import BaseModel, ValidationError
 
@@ -30,6 +28,14 @@ from kintsugi.core.errors import ConfigError, ReasoningError
 from kintsugi.reasoning.base import CallStats
 from kintsugi.reasoning.jsontext import BadReply, describe_validation_error, extract_json_object, loads_object
 from kintsugi.reasoning.roles import ToolRoute  # noqa: F401 - re-exported
+from kintsugi.reasoning.transport import (  # noqa: F401 - errors re-exported
+    STRICT_OPTION_WORDS,
+    ContextTooLong,
+    EndpointError,
+    ImagesRefused,
+    Refused,
+    send,
+)
 
 StructuredOutput = Literal["auto", "strict", "text"]
 Mode = Literal["strict", "text"]
@@ -38,22 +44,8 @@ Option = Literal["json_schema", "tools"]
 
 MAX_ATTEMPTS = 2
 """First reply plus one repair round; more rarely helps and doubles latency."""
-STRICT_OPTION_WORDS = re.compile(r"response.?format|json.?schema|tool.?choice|\btools?\b|function.?call", re.I)
-"""An HTTP 400/422 naming one of these refuses the strict options rather than the request."""
 
 M = TypeVar("M", bound=BaseModel)
-
-
-class EndpointError(ReasoningError):
-    """The endpoint could not be used (unreachable, timeout, HTTP error) after the SDK's retries."""
-
-
-class _Refused(Exception):
-    """Internal: the server refused the strict options of one request (never escapes `ask`)."""
-
-    def __init__(self, reason: str) -> None:
-        super().__init__(reason)
-        self.reason = reason
 
 
 def strict_schema(model: type[BaseModel]) -> dict[str, Any]:
@@ -122,7 +114,8 @@ class StructuredClient:
     """One chat-completions transport for every role; remembers which strict options the server refused."""
 
     def __init__(self, client: OpenAI, model: str, *, where: str, timeout_s: float,
-                 structured_output: StructuredOutput = "auto") -> None:
+                 structured_output: StructuredOutput = "auto", max_retries: int = 0,
+                 max_reply_tokens: int | None = None) -> None:
         if structured_output not in get_args(StructuredOutput):
             raise ConfigError(f"reasoner.structured_output is {structured_output!r}; use one of "
                               f"{', '.join(get_args(StructuredOutput))}")
@@ -130,6 +123,8 @@ class StructuredClient:
         self.model = model
         self.where = where
         self.timeout_s = timeout_s
+        self.max_retries = max_retries
+        self.max_reply_tokens = max_reply_tokens
         self.structured_output: StructuredOutput = structured_output
         self.text_only: dict[Option, str] = {}
         """Options moved to text mode (auto), with the reason; kept for the client's life."""
@@ -162,8 +157,8 @@ class StructuredClient:
         for attempt in range(1, MAX_ATTEMPTS + 1):
             stats(attempt)
             try:
-                completion = self._complete(msgs, self._options(mode, reply, tools))
-            except _Refused as refused:
+                completion = self._complete(msgs, self._options(mode, reply, tools), role)
+            except Refused as refused:
                 if self.structured_output == "strict":
                     raise EndpointError(
                         f"{self.where} refused strict structured output for {role} ({refused.reason}); use "
@@ -173,7 +168,7 @@ class StructuredClient:
                 mode = "text"
                 msgs = with_instructions(msgs, fmt)
                 stats(attempt)
-                completion = self._complete(msgs, {})
+                completion = self._complete(msgs, {}, role)
             usage = getattr(completion, "usage", None)
             if usage is not None:
                 tokens_in += usage.prompt_tokens or 0
@@ -235,36 +230,11 @@ class StructuredClient:
             raise BadReply(f"the reply does not match the schema: {describe_validation_error(exc)}") from None
         return check(value) if check is not None else value
 
-    def _complete(self, messages: list[dict[str, Any]], options: dict[str, Any]) -> Any:
-        where = self.where
-        try:
-            return self.client.chat.completions.create(model=self.model, messages=messages, **options)
-        except openai.APITimeoutError:
-            raise EndpointError(
-                f"no reply from {where} within {self.timeout_s:g} s (after the SDK's retries); "
-                f"raise reasoner.timeout_s or check that the server is not overloaded"
-            ) from None
-        except openai.APIConnectionError as exc:
-            raise EndpointError(f"cannot reach {where} ({exc}); is the server running and the URL right?") from None
-        except openai.AuthenticationError:
-            raise EndpointError(f"{where} rejected the API key; check the env var named by reasoner.api_key_env") from None
-        except openai.NotFoundError as exc:
-            raise EndpointError(f"{where} does not know model {self.model!r} ({exc.message}); set reasoner.model") from None
-        except openai.APIStatusError as exc:
-            text = f"{exc.message} {json.dumps(exc.body, default=str) if exc.body is not None else ''}"
-            if options and exc.status_code in (400, 422) and STRICT_OPTION_WORDS.search(text):
-                raise _Refused(f"HTTP {exc.status_code}: {_shorten(exc.message)}") from None
-            raise EndpointError(
-                f"{where} answered HTTP {exc.status_code}: {exc.message}; if this is 400, the model may not "
-                f"support images, or try --structured-output text"
-            ) from None
-        except openai.APIError as exc:
-            raise EndpointError(f"{where} returned an unusable response: {exc}") from None
-
-
-def _shorten(text: str, limit: int = 300) -> str:
-    text = re.sub(r"^Error code: \d+ - ", "", " ".join(str(text).split()))
-    return text if len(text) <= limit else text[: limit - 3] + "..."
+    def _complete(self, messages: list[dict[str, Any]], options: dict[str, Any], role: str = "this role") -> Any:
+        if self.max_reply_tokens is not None:
+            options = {**options, "max_tokens": self.max_reply_tokens}
+        return send(self.client, self.model, messages, options, where=self.where, timeout_s=self.timeout_s,
+                    max_retries=self.max_retries, what=f"the {role} request")
 
 
 def _ignored(message: Any, finish_reason: str | None, option: Option) -> str | None:

@@ -192,7 +192,7 @@ def check_adaptation(reply: AdaptReply, req: AdaptRequest, samples: int, steps: 
 
 
 ADAPT = ROLES.register(Role(name="adapt", request=AdaptRequest, reply=AdaptReply, package="kintsugi.methods.coral",
-                         embedded=embedded_adaptation, system="system_contact"))
+                         embedded=embedded_adaptation, system="system_contact", sends_images=False))
 
 
 def ask_adaptation(reasoner: Any, req: AdaptRequest, samples: int, steps: int, limits: ProbeLimits = ProbeLimits()

@@ -286,7 +286,7 @@ def embedded_formulation(req: FormulationRequest) -> FormulationReply:
 
 FORMULATE = ROLES.register(Role(name="formulate", request=FormulationRequest, reply=FormulationReply,
                                 package="kintsugi.methods.coral", embedded=embedded_formulation,
-                                system="system_contact"))
+                                system="system_contact", sends_images=False))
 
 
 def ask_formulation(reasoner: Any, req: FormulationRequest, samples: int, steps: int,

@@ -117,7 +117,7 @@ def check_priors(reply: PriorsReply, request: PriorsRequest) -> tuple[PriorsRepl
 
 
 PRIORS = ROLES.register(Role(name="priors", request=PriorsRequest, reply=PriorsReply, package="kintsugi.methods.coral",
-                          embedded=embedded_priors, system="system_contact"))
+                          embedded=embedded_priors, system="system_contact", sends_images=False))
 
 
 def ask_priors(reasoner: Any, request: PriorsRequest) -> tuple[PriorsReply, list[str]]:

@@ -1,0 +1,33 @@
+#!/usr/bin/env bash
+# Build llama.cpp's llama-server from the pinned llama-cpp-python source package, once per machine.
+# Usage: build_llama_server.sh [PIP]   -> prints the path of the binary on its last line.
+# Cache: ${KINTSUGI_CACHE:-~/.cache/kintsugi}/llama-cpp-python-$VERSION/ (sdist, sources, build, bin).
+set -euo pipefail
+VERSION="${LLAMA_CPP_PYTHON_VERSION:-0.3.36}"
+PIP="${1:-pip}"
+CACHE="${KINTSUGI_CACHE:-$HOME/.cache/kintsugi}/llama-cpp-python-$VERSION"
+BIN="$CACHE/bin/llama-server"
+if [ -x "$BIN" ]; then echo "$BIN"; exit 0; fi
+mkdir -p "$CACHE"
+exec 9>"$CACHE/.lock"
+flock 9
+if [ -x "$BIN" ]; then echo "$BIN"; exit 0; fi
+SDIST="$CACHE/llama_cpp_python-$VERSION.tar.gz"
+if [ ! -f "$SDIST" ]; then
+  "$PIP" download --quiet --no-binary :all: --no-deps --no-build-isolation \
+    "llama-cpp-python==$VERSION" -d "$CACHE" >&2
+fi
+if [ ! -d "$CACHE/src" ]; then
+  rm -rf "$CACHE/src.tmp" && mkdir -p "$CACHE/src.tmp"
+  tar -xzf "$SDIST" -C "$CACHE/src.tmp" --strip-components=1
+  mv "$CACHE/src.tmp" "$CACHE/src"
+fi
+JOBS="${KINTSUGI_BUILD_JOBS:-$(nproc)}"
+nice -n "${KINTSUGI_BUILD_NICE:-10}" cmake -S "$CACHE/src/vendor/llama.cpp" -B "$CACHE/build" -G Ninja \
+  -DCMAKE_BUILD_TYPE=Release -DGGML_NATIVE=OFF -DLLAMA_BUILD_TESTS=OFF -DLLAMA_BUILD_EXAMPLES=OFF \
+  -DLLAMA_BUILD_UI=OFF -DLLAMA_USE_PREBUILT_UI=OFF -DLLAMA_OPENSSL=OFF -DLLAMA_CURL=OFF \
+  -DBUILD_SHARED_LIBS=OFF >&2
+nice -n "${KINTSUGI_BUILD_NICE:-10}" cmake --build "$CACHE/build" --target llama-server -j "$JOBS" >&2
+mkdir -p "$CACHE/bin"
+cp "$CACHE/build/bin/llama-server" "$BIN.tmp" && mv "$BIN.tmp" "$BIN"
+echo "$BIN"
