@@ -2,8 +2,8 @@
 
 A cycle = one attempt of the expert-FSM costs planned in the current beliefs (the scene is
 reset before each), then a fit of the target object's mass and friction on every logged
-window so far, written back into the planning world. The prior is the nominal physics x
-sysid.prior_mass_scale (8) and x sysid.prior_friction_scale (1.8). Cycles stop when no
+window so far, written back into the planning world. The prior is mppi-sysid's: each known
+model's volume at sysid.prior_density_kg_m3 (steel), friction sysid.prior_friction. Cycles stop when no
 belief moved more than 5 % or after 4. Errors are |belief - truth| / truth (the truth is
 read here, by the benchmark, only to score).
 
@@ -25,6 +25,7 @@ import argparse
 import json
 import sys
 import time
+from dataclasses import replace
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
@@ -79,7 +80,7 @@ def one(task_name: str, seed: int, prior: str = "scaled", all_cycles: bool = Fal
         if cycle:
             robot.restart()
         robot.new_log()
-        result, _ = run_attempt(cfg, robot, planning, expert_design(task_name, True)(ctx), TrialLog(),
+        result, _ = run_attempt(cfg, robot, planning, expert_design(task_name, True)(replace(ctx, seed=seed)), TrialLog(),
                                 seed=seed + 1000 * cycle)
         successes.append(bool(scorer.finish(world)[0]))
         fitter.add(robot.new_log())
@@ -135,7 +136,7 @@ def main() -> None:
     ap.add_argument("--tasks", default="push-pick-board,push-force")
     ap.add_argument("--seeds", default="0,1,2", help="comma-separated, or a range such as 0-9")
     ap.add_argument("--prior", choices=("scaled", "coral"), default="scaled",
-                    help="scaled: the nominal physics x sysid.prior_*_scale (8, 1.8); coral: the physics-priors role")
+                    help="scaled: mppi-sysid's prior (steel density x known volume, friction 0.9); coral: the physics-priors role")
     ap.add_argument("--all-cycles", action="store_true", help="run all four cycles (the sensitivity study)")
     args = ap.parse_args()
     print("machine:", machine())

@@ -70,6 +70,7 @@ class Coral:
         self.attempts: list[dict[str, Any]] = []
         self.info: dict[str, Any] = {"variant": variant.name}
         self._now = 0.0
+        self._seed = 0
 
     # --- building the requests --------------------------------------------------------------------------------
     def scene_request(self, obs: Any, priors: dict[str, Any]) -> Any:
@@ -120,8 +121,11 @@ class Coral:
         from kintsugi.worlds.contact.objects import Physics
         from kintsugi.worlds.contact.world import PlanningWorld
 
+        from kintsugi.methods.mppi.execute import observation_seed
+
         ctx, cfg = self.ctx, self.ctx.cfg
         obs = robot.observe()
+        self._seed = observation_seed(obs)
         views = object_views(ctx.known)
         # No camera image: the contact robot has no image API yet, so the roles get labels, sizes and poses only.
         priors, notes = ask_priors(reasoner, PriorsRequest(task=ctx.task_text, objects=views))
@@ -183,11 +187,11 @@ class Coral:
         from kintsugi.methods.mppi.execute import run_attempt
 
         timing = CodeTiming()
-        factories = build_stages(plan, program, self.ctx.known, self.ctx.cfg, self.ctx.seed + 1000 * attempt, timing,
+        factories = build_stages(plan, program, self.ctx.known, self.ctx.cfg, self._seed + 1000 * attempt, timing,
                                  first_env(robot.observe()))
         try:
             result, trace = run_attempt(self.ctx.cfg, robot, planning, factories, log,
-                                        seed=self.ctx.seed + 1000 * attempt)
+                                        seed=self._seed + 1000 * attempt)
         except CostCodeError as exc:
             log.event(robot.sim_time, "cost error", str(exc)[:300])
             return None, None, timing, str(exc)[:300]

@@ -4,12 +4,14 @@
 - `expert-fsm`: hand-written staged costs with transitions; planning world = the truth
   (the paper's upper bound).
 - `mppi-sysid`: the expert-FSM costs, but the planning world starts from a wrong prior
-  (nominal masses x `sysid.prior_mass_scale`, frictions x `sysid.prior_friction_scale`)
-  and system identification corrects it from the logged attempt after each failure.
+  (each known model's volume at `sysid.prior_density_kg_m3`, friction `sysid.prior_friction`)
+  and system identification corrects it from the logged attempt after each failure. It is not an
+  oracle: no true physics, no trial seed, no ranges (its planner is seeded from its first observation).
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 from kintsugi.core.errors import ConfigError
@@ -72,21 +74,26 @@ class MPPISysId:
         self.ctx = ctx
         self.design = expert_design(ctx.task.name, staged=True)
         self.history: list[dict[str, float]] = []
+        self._seed = 0
 
     def prior(self) -> dict[str, Any]:
-        """Nominal (catalogue) physics scaled by the configured error: never the trial's truth."""
+        """Each object's known-model volume at the configured density, and the configured friction: a prior from
+        the shape alone, never the trial's truth or its ranges."""
         from kintsugi.worlds.contact.objects import Physics
 
         s = self.ctx.cfg.sysid
-        return {k: Physics(mass_kg=p.mass_kg * s.prior_mass_scale, friction=p.friction * s.prior_friction_scale)
-                for k, p in self.ctx.nominal.items()}
+        lo, hi = s.mass_bounds_kg
+        return {k: Physics(mass_kg=min(hi, max(lo, sum(g.volumes) * s.prior_density_kg_m3)), friction=s.prior_friction)
+                for k, g in self.ctx.known.geometry.items()}
 
     def run(self, robot: Any, log: TrialLog) -> bool:
-        from kintsugi.methods.mppi.execute import run_attempt
+        from kintsugi.methods.mppi.execute import observation_seed
         from kintsugi.methods.mppi.identify import BeliefFitter
         from kintsugi.worlds.contact.world import PlanningWorld
 
         cfg, obj = self.ctx.cfg, self.ctx.task.target
+        self._seed = observation_seed(robot.observe())
+        self._design_ctx = replace(self.ctx, seed=self._seed)  # the expert designs seed their contact samples
         planning = PlanningWorld(cfg, self.ctx.known, self.prior())
         fitter = BeliefFitter(planning, obj, cfg.sysid.mass_bounds_kg, cfg.sysid.friction_bounds)
         self._note(planning, obj)
@@ -96,14 +103,16 @@ class MPPISysId:
             log.figures(self.figures())
 
     def _attempts(self, robot: Any, log: TrialLog, planning: Any, fitter: Any, obj: str) -> bool:
+        from kintsugi.methods.mppi.execute import run_attempt
+
         cfg = self.ctx.cfg
         for attempt in range(cfg.sysid.max_attempts):
             if attempt:
                 robot.restart()
                 log.event(robot.sim_time, "restart", f"attempt {attempt + 1} of {cfg.sysid.max_attempts}")
             robot.new_log()
-            result, _ = run_attempt(cfg, robot, planning, self.design(self.ctx), log,
-                                    seed=self.ctx.seed + 1000 * attempt)
+            result, _ = run_attempt(cfg, robot, planning, self.design(self._design_ctx), log,
+                                    seed=self._seed + 1000 * attempt)
             if result.reached:
                 return True
             if attempt + 1 == cfg.sysid.max_attempts:

@@ -7,6 +7,7 @@ stage transitions are judged on observations. Every stage the machine leaves bec
 
 from __future__ import annotations
 
+import zlib
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -24,6 +25,14 @@ from kintsugi.core.record import SkillLog
 from kintsugi.core.log import TrialLog
 
 GRIP = ACTUATORS.index("grip")
+
+
+def observation_seed(obs: Observation) -> int:
+    """A planner seed from what the robot first observes (its pose and the tracked objects' poses): a trial
+    replays exactly and trials differ, without the trial's own seed (which would re-draw the truth)."""
+    parts = [np.round(obs.ee, 6).tobytes()]
+    parts += [np.round(np.concatenate([o.pos, o.quat]), 6).tobytes() for _, o in sorted(obs.objects.items())]
+    return zlib.crc32(b"".join(parts)) % 1_000_000
 
 
 @dataclass

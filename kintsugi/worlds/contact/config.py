@@ -96,9 +96,11 @@ class ControlSection(StrictModel):
 class SysIdSection(StrictModel):
     """The `mppi-sysid` method: a wrong prior, corrected after each failed attempt."""
 
-    prior_mass_scale: float = Field(8.0, gt=0)
-    """The planning world starts at this multiple of the objects' NOMINAL masses (never the truth)."""
-    prior_friction_scale: float = Field(1.8, gt=0)
+    prior_density_kg_m3: float = Field(8000.0, gt=0)
+    """The planning world starts with each object's known-model volume at this density (steel: a wrong prior for
+    wood and cardboard), clipped to `mass_bounds_kg`; never the trial's truth or the middle of its ranges."""
+    prior_friction: float = Field(0.9, gt=0)
+    """The planning world's starting friction of every object against the table."""
     max_attempts: int = Field(4, ge=1)
     """Attempts per trial; system identification runs after each failed one (the scene is reset between)."""
     mass_bounds_kg: Range = (0.02, 5.0)

@@ -23,7 +23,8 @@ from kintsugi.worlds.contact.world import EvaluationWorld, Scene, rotate
 @dataclass(frozen=True)
 class TrialSetup:
     """One trial's draws: the scene, the TRUE physics (evaluation world only), the nominal
-    physics (the catalogue values a prior may start from), and the drawn numbers for the record."""
+    physics (the middle of the ranges: world side, never in a non-oracle method's context),
+    and the drawn numbers for the record."""
 
     scene: Scene
     truth: dict[str, Physics]

@@ -1,7 +1,8 @@
 """Any contact `ContactTaskDef` as a task: a trial's evaluation world, robot, context and scorer as an `Episode`.
 
 Methods tagged `system-c` drive it (they get a `ContactContext` and a `ContactRobot`); only
-methods also tagged `oracle-physics` get the trial's true masses and frictions in their context.
+methods also tagged `oracle-physics` get the trial's true masses and frictions, its seed and the
+config's ranges in their context.
 The scorer watches the evaluation world at the robot's inner rate and judges the end.
 """
 
@@ -14,7 +15,7 @@ from kintsugi.core.registry import TASKS
 from kintsugi.core.task import Episode, Task
 from kintsugi.worlds.contact.conditions import CONDITIONS, Drawer
 from kintsugi.worlds.contact.config import ContactConfig
-from kintsugi.worlds.contact.context import METHOD_TAG, ORACLE_TAG, ContactContext
+from kintsugi.worlds.contact.context import METHOD_TAG, ORACLE_TAG, ContactContext, TaskBrief, withheld
 from kintsugi.worlds.contact.robot import ContactRobot
 from kintsugi.worlds.contact.spec import ContactTaskDef, Scorer, TrialSetup
 from kintsugi.worlds.contact.world import EvaluationWorld
@@ -37,7 +38,7 @@ class ContactEpisode(Episode):
         self.robot.plan_stats = self.video.plan_step if self.video else None
 
     def context(self, tags: frozenset[str], reasoner: ReasonerSettings, seed: int) -> ContactContext:
-        """Only `oracle-physics` methods (the expert baselines, by design) are given the true physics."""
+        """Only `oracle-physics` methods (the expert baselines, by design) are given the true physics and the seed."""
         return self.task.context(self.cfg, self.setup, ORACLE_TAG in tags, reasoner, seed)
 
     def score(self) -> tuple[bool, TaskFigures]:
@@ -86,8 +87,11 @@ class ContactTask(Task):
 
     def context(self, cfg: ContactConfig, setup: TrialSetup, oracle: bool, reasoner: ReasonerSettings,
                 seed: int) -> ContactContext:
-        return ContactContext(cfg=cfg, task=self.spec, known=setup.scene, nominal=dict(setup.nominal),
-                              oracle_physics=dict(setup.truth) if oracle else None, reasoner=reasoner, seed=seed)
+        brief = TaskBrief(name=self.spec.name, instruction=self.spec.instruction, target=self.spec.target)
+        if oracle:
+            return ContactContext(cfg=cfg, task=brief, known=setup.scene, oracle_physics=dict(setup.truth),
+                                  reasoner=reasoner, seed=seed)
+        return ContactContext(cfg=withheld(cfg), task=brief, known=setup.scene, reasoner=reasoner)
 
     def episode(self, cfg: ContactConfig, variant: str, condition: str, seed: int,
                 video: bool = False) -> ContactEpisode:

@@ -26,15 +26,24 @@ def _ctx(condition: str, seed: int):  # noqa: ANN202
     return task, cfg, world, setup, task.context(cfg, setup, False, ReasonerSettings(), seed)
 
 
-def test_the_prior_comes_from_the_catalogue_never_from_the_trial() -> None:
-    priors = []
+def test_the_prior_comes_from_the_known_shape_never_from_the_trial_or_its_ranges() -> None:
     for seed in (0, 1):
         _, cfg, _, setup, ctx = _ctx("physics", seed)
-        assert ctx.oracle_physics is None
+        assert ctx.oracle_physics is None and ctx.seed is None
+        assert ctx.cfg.box.mass_kg is None and ctx.cfg.box.friction is None  # no range, so no midpoint
         prior = MPPISysId(ctx).prior()["box"]
-        assert prior.mass_kg == pytest.approx(setup.nominal["box"].mass_kg * cfg.sysid.prior_mass_scale)
-        priors.append(prior)
-    assert priors[0] == priors[1]  # the truth differs between the seeds; the prior does not
+        volume = sum(setup.scene.geometry["box"].volumes)
+        assert prior.mass_kg == pytest.approx(volume * cfg.sysid.prior_density_kg_m3)
+        assert prior.friction == cfg.sysid.prior_friction
+    # the same shape gives the same prior whatever the ranges say
+    task = TASKS.get("push-force").factory()
+    wide = task.config({"box.mass_kg": [0.01, 4.0], "box.friction": [0.1, 1.4]})
+    _, _, setup = task.build(wide, "physics", 0)
+    _, _, _, setup0, ctx0 = _ctx("physics", 0)
+    other = MPPISysId(task.context(wide, setup, False, ReasonerSettings(), 0)).prior()["box"]
+    mine = MPPISysId(ctx0).prior()["box"]
+    ratio = sum(setup.scene.geometry["box"].volumes) / sum(setup0.scene.geometry["box"].volumes)
+    assert other.mass_kg == pytest.approx(mine.mass_kg * ratio) and other.friction == mine.friction
 
 
 def _push_and_release(robot: ContactRobot, setup, speed: float) -> None:  # noqa: ANN001
@@ -51,7 +60,7 @@ def _push_and_release(robot: ContactRobot, setup, speed: float) -> None:  # noqa
 
 
 def _pushed(sysid: SysIdConfig):  # noqa: ANN202
-    """A fitter from the 8x / 1.8x prior holding the windows of one scripted push of the box (seed 3)."""
+    """A fitter from the steel-density prior holding the windows of one scripted push of the box (seed 3)."""
     _, cfg, world, setup, ctx = _ctx("physics", 3)
     robot = ContactRobot(world)
     planning = PlanningWorld(cfg, ctx.known, MPPISysId(ctx).prior())
@@ -62,7 +71,7 @@ def _pushed(sysid: SysIdConfig):  # noqa: ANN202
 
 
 @pytest.mark.slow
-def test_sysid_pulls_an_8x_1_8x_prior_toward_the_truth_from_the_robots_log() -> None:
+def test_sysid_pulls_a_steel_density_prior_toward_the_truth_from_the_robots_log() -> None:
     fitter, planning, setup = _pushed(SysIdConfig(grid=9, zoom_rounds=2, max_evals=40, nthread=2, substeps=5))
     assert len(fitter.logs) >= 2
     phys, result = fitter.fit()
@@ -71,14 +80,14 @@ def test_sysid_pulls_an_8x_1_8x_prior_toward_the_truth_from_the_robots_log() -> 
     # a push pins the friction force (mu x m x g) well; mass and friction apart are seen only weakly
     product = phys.friction * phys.mass_kg / (truth.friction * truth.mass_kg)
     assert abs(product - 1) < 0.1, (phys, truth)
-    assert abs(phys.mass_kg / truth.mass_kg - 1) < 0.5, (phys, truth)  # from 8x
+    assert abs(phys.mass_kg / truth.mass_kg - 1) < 0.5, (phys, truth)  # from several times the truth
     assert planning.physics_of("box").mass_kg == pytest.approx(phys.mass_kg)
 
 
 def test_windows_hold_what_the_robot_saw() -> None:
     _, cfg, world, setup, ctx = _ctx("none", 0)
     robot = ContactRobot(world)
-    planning = PlanningWorld(cfg, ctx.known, ctx.nominal)
+    planning = PlanningWorld(cfg, ctx.known, dict(setup.nominal))
     _push_and_release(robot, setup, 0.3)
     log = robot.new_log()
     wins = windows(planning, log, "box")
