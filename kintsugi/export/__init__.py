@@ -1,5 +1,7 @@
-"""Recovery trajectory export for policy learning (AgentChord IV-E): chosen trials of a campaign, re-run with
-a recorder, written as a LeRobot v2.1 dataset or a robomimic HDF5 file with nominal/recovery segment labels.
+"""Trajectory export for policy learning (AgentChord IV-E): chosen trials of a campaign of any system (peg,
+tabletop, contact), re-run with a recorder, written as a LeRobot v3.0 dataset (`lerobot`), a robomimic HDF5
+file (`hdf5`) or, for tabletop campaigns, LeRobot's older v2.1 layout (`lerobot-v2.1`), with nominal/recovery
+segment labels.
 
 `export_campaign` is what `kintsugi export` calls. Each chosen trial is re-run from its recorded spec
 (trials are deterministic per seed) and checked against its record (`replay.compare`); a trial that does
@@ -18,7 +20,8 @@ from kintsugi.core.errors import ConfigError, KintsugiError
 from kintsugi.export.select import parse_filter
 from kintsugi.core.record import TrialSpec
 
-Format = Literal["lerobot", "hdf5"]
+Format = Literal["lerobot", "hdf5", "lerobot-v2.1"]
+FORMATS = ("hdf5", "lerobot", "lerobot-v2.1")
 MANIFEST = "export.json"
 
 
@@ -53,16 +56,19 @@ def _check_out(out: Path) -> None:
 def export_campaign(campaign_dir: str | Path, fmt: Format, out: str | Path, trials: str | None = None,
                     fps: float = 10.0, on_trial: Callable[[str, str], None] | None = None) -> ExportReport:
     """Export the trials of `campaign_dir` that `trials` keeps; raise KintsugiError before any re-run on bad
-    input (unknown format, bad filter, no match, a task that is not tabletop, a non-embedded reasoner)."""
+    input (unknown format, bad filter, no match, v2.1 of a task that is not tabletop, a non-embedded reasoner).
+
+    Tabletop trials in `hdf5` and `lerobot-v2.1` keep the tabletop recorder's layout (graph-edge labels,
+    14 joint/gripper actions); every other export records through the step-level driver (`frames`)."""
     import time
 
     from kintsugi.campaign.bootstrap import bootstrap
     from kintsugi.campaign.store import ResultStore
-    from kintsugi.export.replay import frame_stride, replay
+    from kintsugi.export.replay import control_rate, frame_stride, replay
     from kintsugi.core.registry import TASKS
 
-    if fmt not in ("lerobot", "hdf5"):
-        raise ConfigError(f"unknown export format {fmt!r}; known: hdf5, lerobot")
+    if fmt not in FORMATS:
+        raise ConfigError(f"unknown export format {fmt!r}; known: {', '.join(FORMATS)}")
     _dependencies(fmt)
     out = Path(out)
     store = ResultStore(campaign_dir)
@@ -77,15 +83,21 @@ def export_campaign(campaign_dir: str | Path, fmt: Format, out: str | Path, tria
                             f"e.g. {records[0].key})")
     bootstrap(cfg.plugins, cfg.task)
     entry = TASKS.get(cfg.task)
-    if "tabletop" not in entry.tags:
-        raise ConfigError(f"export re-runs tabletop (system B) trials; task {cfg.task!r} is not one")
+    task = entry.factory()
+    tabletop = task.system == "tabletop"
+    if fmt == "lerobot-v2.1" and not tabletop:
+        raise ConfigError(f"--format lerobot-v2.1 is the tabletop (system B) layout; task {cfg.task!r} is "
+                          f"{task.system}: use --format lerobot (v3.0) or hdf5")
     if cfg.reasoner.backend != "embedded":
         raise ConfigError(f"export re-runs each trial, and the {cfg.reasoner.backend!r} reasoner's replies are not "
                           "replayed from the record; export supports campaigns on the embedded reasoner")
-    task = entry.factory()
-    frame_stride(1.0 / task.config(cfg.overrides).sim.control_dt_s, fps)
+    from kintsugi.core.resolve import split_overrides
+
+    frame_stride(control_rate(task, task.config(split_overrides(cfg.overrides)[0])), fps)
+    generic = fmt == "lerobot" or not tabletop
     _check_out(out)
-    source = {"campaign": str(Path(campaign_dir).resolve()), "task": cfg.task, "filter": filt.text,
+    source = {"campaign": str(Path(campaign_dir).resolve()), "task": cfg.task, "system": task.system,
+              "filter": filt.text,
               "config": cfg.model_dump(mode="json")}
     report = ExportReport(out=out, path=None)
     writer = None
@@ -95,7 +107,7 @@ def export_campaign(campaign_dir: str | Path, fmt: Format, out: str | Path, tria
                              overrides=cfg.overrides, reasoner=cfg.reasoner)
             start = time.perf_counter()
             try:
-                ep = replay(spec, r, fps)
+                ep = replay(spec, r, fps, generic=generic)
             except KintsugiError as exc:
                 report.refused.append((r.key, str(exc)))
                 if on_trial is not None:
@@ -143,6 +155,10 @@ def _writer(fmt: Format, out: Path, source: dict):  # noqa: ANN202 - either writ
         from kintsugi.export.hdf5 import Hdf5Writer
 
         return Hdf5Writer(out, source)
+    if fmt == "lerobot":
+        from kintsugi.export.lerobot_v3 import LeRobotV3Writer
+
+        return LeRobotV3Writer(out, source)
     from kintsugi.export.lerobot import LeRobotWriter
 
     return LeRobotWriter(out, source)

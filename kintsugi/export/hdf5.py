@@ -93,12 +93,14 @@ class Hdf5Writer:
         if self._env_kwargs is None:
             self._env_kwargs = {"task": ep.task, "instruction": ep.instruction, "fps": ep.fps,
                                 "control_hz": ep.meta.get("control_hz"), "cameras": list(ep.images),
-                                "action_names": list(ACTION_NAMES), "config": ep.meta.get("config")}
+                                "action_names": ep.meta.get("action_names", list(ACTION_NAMES)),
+                                "family": ep.meta.get("family", "tabletop"), "config": ep.meta.get("config")}
 
     def close(self) -> Path:
         d = self._data
         d.attrs["total"] = self._total
-        d.attrs["env_args"] = json.dumps({"env_name": self._source.get("task", ""), "type": ENV_TYPE,
+        env_type = f"kintsugi-{self._source['system']}" if "system" in self._source else ENV_TYPE
+        d.attrs["env_args"] = json.dumps({"env_name": self._source.get("task", ""), "type": env_type,
                                           "env_kwargs": self._env_kwargs or {}})
         d.attrs["label_vocab"] = json.dumps({"segment": ["nominal", "recovery"], "edge": self.edges.names,
                                              "action": self.actions.names})

@@ -144,7 +144,9 @@ class TrajectoryRecorder:
             s = r.arm_state(arm)
             obs[f"{arm}_joint_pos"] = np.radians(np.asarray(s.joints_deg, dtype=np.float64))
             obs[f"{arm}_eef_pos"] = np.asarray(s.tcp_pos, dtype=np.float64)
-            obs[f"{arm}_eef_quat"] = _quat_xyzw(s.tcp_rpy_deg)
+            q = _quat_xyzw(s.tcp_rpy_deg)
+            last = self._obs[-1][f"{arm}_eef_quat"] if self._obs else None
+            obs[f"{arm}_eef_quat"] = -q if (last is not None and q @ last < 0) or (last is None and q[3] < 0) else q
             obs[f"{arm}_gripper_opening"] = np.array([s.gripper_opening_m])
             obs[f"{arm}_pad_force"] = np.array([s.pad_force_n])
         self._obs.append(obs)

@@ -68,16 +68,38 @@ def compare(stored: TrialRecord, again: TrialRecord) -> list[str]:
     return out
 
 
-def replay(spec: TrialSpec, stored: TrialRecord, fps: float) -> Episode:
-    """Run `spec` again with a recorder attached; the episode, or ReplayMismatch / KintsugiError."""
+def control_rate(task: Any, cfg: Any) -> float:
+    """Control periods per second of the task's robot (what an exported frame rate must divide)."""
+    if task.system == "tabletop":
+        return 1.0 / cfg.sim.control_dt_s
+    if task.system == "peg":
+        n = max(1, round(1.0 / cfg.control.rate_hz / cfg.sim.timestep_s))
+        return 1.0 / (n * cfg.sim.timestep_s)
+    if task.system == "contact":
+        n = max(1, round(1.0 / (INNER_HZ * cfg.sim.timestep_s)))
+        return 1.0 / (n * cfg.sim.timestep_s)
+    raise ConfigError(f"export knows the peg, tabletop and contact systems, not {task.system!r}")
+
+
+INNER_HZ = 100.0
+"""The contact robot's inner control rate (`ContactRobot`'s default, the rate its servos are commanded at)."""
+
+
+def replay(spec: TrialSpec, stored: TrialRecord, fps: float, generic: bool = False) -> Episode:
+    """Run `spec` again with a recorder attached; the episode, or ReplayMismatch / KintsugiError.
+
+    `generic`: record through the step-level driver (`frames.FrameRecorder`, any system), else with the
+    tabletop `TrajectoryRecorder` (graph-edge labels, the v2.1 and HDF5 tabletop layout)."""
     from kintsugi.core.registry import TASKS
     from kintsugi.core.resolve import split_overrides
     from kintsugi.core.runner import run_trial
+    from kintsugi.export.frames import FrameRecorder
 
     task = TASKS.get(spec.task).factory()
     cfg = task.config(split_overrides(spec.overrides)[0])
-    control_hz = 1.0 / cfg.sim.control_dt_s
-    recorder = TrajectoryRecorder(frame_stride(control_hz, fps))
+    control_hz = control_rate(task, cfg)
+    every = frame_stride(control_hz, fps)
+    recorder = FrameRecorder(every) if generic else TrajectoryRecorder(every)
     start = time.perf_counter()
     try:
         again = run_trial(spec.model_copy(update={"video": None}), echo=recorder.echo, attach=recorder.attach)
@@ -93,13 +115,16 @@ def replay(spec: TrialSpec, stored: TrialRecord, fps: float) -> Episode:
     if recorder.steps < recorder.every:
         raise KintsugiError(f"{spec.key}: the trial ran {recorder.steps} control steps, less than one frame "
                             f"at {fps:g} fps; nothing to export")
-    per_tick = max(1, round(cfg.sim.control_dt_s / cfg.sim.timestep_s))
-    if recorder.steps != again.physics_steps // per_tick:
-        raise KintsugiError(f"{spec.key}: the recorder saw {recorder.steps} control steps of the "
-                            f"{again.physics_steps // per_tick} the trial ran")
-    ep = recorder.episode(spec.key, spec.task, task.spec.instruction, again, control_hz)
-    ep.meta = {"spec": spec.model_dump(mode="json"), "config": cfg.model_dump(mode="json"),
-               "control_hz": control_hz, "episode_steps": episode_steps(again),
-               "recovered": bool(ep.recovery.any()), "replay_s": round(time.perf_counter() - start, 3),
-               "transitions": [list(t) for t in again.transitions]}
+    if not generic:
+        per_tick = max(1, round(cfg.sim.control_dt_s / cfg.sim.timestep_s))
+        if recorder.steps != again.physics_steps // per_tick:
+            raise KintsugiError(f"{spec.key}: the recorder saw {recorder.steps} control steps of the "
+                                f"{again.physics_steps // per_tick} the trial ran")
+    spec_of = getattr(task, "spec", None)
+    instruction = getattr(spec_of, "instruction", None) or task.description
+    ep = recorder.episode(spec.key, spec.task, instruction, again, control_hz)
+    ep.meta |= {"spec": spec.model_dump(mode="json"), "config": cfg.model_dump(mode="json"),
+                "control_hz": control_hz, "episode_steps": episode_steps(again),
+                "recovered": bool(ep.recovery.any()), "replay_s": round(time.perf_counter() - start, 3),
+                "transitions": [list(t) for t in again.transitions]}
     return ep
