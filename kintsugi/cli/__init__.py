@@ -251,8 +251,8 @@ def graph(
 @app.command()
 def export(
     campaign: Annotated[Path, typer.Argument(help="campaign directory (campaign.json + results.jsonl)")],
-    format_: Annotated[Literal["lerobot", "hdf5"], typer.Option("--format", help="lerobot (v2.1 layout) or hdf5 "
-                                                                "(robomimic layout)")],
+    format_: Annotated[Literal["lerobot", "hdf5", "lerobot-v2.1"], typer.Option(
+        "--format", help="lerobot (v3.0 layout, any system), hdf5 (robomimic layout) or lerobot-v2.1 (tabletop)")],
     out: Annotated[Path, typer.Option(help="new (or empty) directory to write the dataset into")],
     trials: Annotated[Optional[str], typer.Option(help="which trials, e.g. 'method=agentchord,condition=drop,"
                                                   "seed=0-9,recovered' (fields task method variant condition key "

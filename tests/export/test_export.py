@@ -108,7 +108,7 @@ def test_lerobot_layout_reads_back_and_agrees_with_hdf5(campaign: Path, hdf5_exp
     from kintsugi.export import export_campaign
 
     out = tmp_path / "lr"
-    rep = export_campaign(campaign, "lerobot", out, fps=5)
+    rep = export_campaign(campaign, "lerobot-v2.1", out, fps=5)
     assert [e.key for e in rep.exported] == [KEY]
     info = json.loads((out / "meta/info.json").read_text())
     assert info["codebase_version"] == "v2.1" and info["fps"] == 5 and info["total_episodes"] == 1
