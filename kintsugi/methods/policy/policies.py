@@ -54,32 +54,48 @@ def low_dim(obs: dict[str, np.ndarray], keys: tuple[str, ...]) -> np.ndarray:
     return np.concatenate([np.asarray(obs[k], dtype=np.float64).reshape(-1) for k in keys])
 
 
+def time_features(i: int | np.ndarray, steps: int, bases: int) -> np.ndarray:
+    """Gaussian bumps over the policy's own clock (step i of `steps`): lets a linear map follow a trajectory's
+    phases (no observation of the world in it, only the policy's count of its own steps)."""
+    if bases <= 0:
+        return np.zeros((np.size(i), 0))
+    centres = np.linspace(0.0, 1.0, bases)
+    x = np.atleast_1d(np.asarray(i, dtype=np.float64)) / max(steps, 1)
+    return np.exp(-0.5 * ((x[:, None] - centres[None, :]) * (bases - 1 or 1)) ** 2)
+
+
 class LinearPolicy:
-    """a = W^T [x; 1] on standardised low-dimensional observations (no images); runs `steps` control steps."""
+    """a = W^T [x; phi(t); 1] on standardised low-dimensional observations x (no images) and `bases` time
+    features phi of the policy's own step count; runs `steps` control steps."""
 
     images = False
 
     def __init__(self, keys: tuple[str, ...], mean: np.ndarray, std: np.ndarray, weights: np.ndarray,
-                 steps: int, meta: dict[str, Any] | None = None) -> None:
+                 steps: int, meta: dict[str, Any] | None = None, bases: int = 0) -> None:
         self.keys, self.mean, self.std, self.weights, self.steps = keys, mean, std, weights, steps
+        self.bases = bases
         self.meta = meta or {}
         self._i = 0
 
     @classmethod
     def fit(cls, obs: np.ndarray, actions: np.ndarray, keys: tuple[str, ...], steps: int, ridge: float = 1e-3,
-            meta: dict[str, Any] | None = None) -> "LinearPolicy":
-        """Least squares with an L2 penalty `ridge` on standardised features (scale-free), plus a bias."""
+            meta: dict[str, Any] | None = None, step_index: np.ndarray | None = None,
+            bases: int = 0) -> "LinearPolicy":
+        """Least squares with an L2 penalty `ridge` on standardised features (scale-free), plus a bias;
+        `step_index` (each row's step in its episode) feeds `bases` time features."""
         mean, std = obs.mean(0), obs.std(0)
         std = np.where(std > 1e-9, std, 1.0)
-        x = np.hstack([(obs - mean) / std, np.ones((len(obs), 1))])
+        phi = time_features(step_index if step_index is not None else np.zeros(len(obs)), steps, bases)
+        x = np.hstack([(obs - mean) / std, phi, np.ones((len(obs), 1))])
         reg = ridge * len(obs) * np.eye(x.shape[1])
         reg[-1, -1] = 0.0
         w = np.linalg.solve(x.T @ x + reg, x.T @ actions)
-        return cls(keys, mean, std, w, steps, meta)
+        return cls(keys, mean, std, w, steps, meta, bases)
 
-    def predict(self, x: np.ndarray) -> np.ndarray:
-        z = np.hstack([(np.atleast_2d(x) - self.mean) / self.std, np.ones((len(np.atleast_2d(x)), 1))])
-        return z @ self.weights
+    def predict(self, x: np.ndarray, step: int | np.ndarray = 0) -> np.ndarray:
+        x = np.atleast_2d(x)
+        phi = time_features(np.broadcast_to(step, (len(x),)), self.steps, self.bases)
+        return np.hstack([(x - self.mean) / self.std, phi, np.ones((len(x), 1))]) @ self.weights
 
     def reset(self) -> None:
         self._i = 0
@@ -88,10 +104,10 @@ class LinearPolicy:
         if self._i >= self.steps:
             return None
         self._i += 1
-        return self.predict(low_dim(obs, self.keys))[0]
+        return self.predict(low_dim(obs, self.keys), self._i - 1)[0]
 
     def save(self, path: str | Path) -> Path:
-        meta = {"kind": LINEAR, "keys": list(self.keys), "steps": self.steps, **self.meta}
+        meta = {"kind": LINEAR, "keys": list(self.keys), "steps": self.steps, "bases": self.bases, **self.meta}
         np.savez(path, mean=self.mean, std=self.std, weights=self.weights, meta=np.array(json.dumps(meta)))
         path = Path(path)
         return path if path.suffix == ".npz" else path.with_name(path.name + ".npz")
@@ -110,7 +126,8 @@ def load_policy(path: str) -> Any:
             kind = meta.get("kind")
             if kind == LINEAR:
                 return LinearPolicy(tuple(meta["keys"]), f["mean"], f["std"], f["weights"], int(meta["steps"]),
-                                    {k: v for k, v in meta.items() if k not in ("kind", "keys", "steps")})
+                                    {k: v for k, v in meta.items() if k not in ("kind", "keys", "steps", "bases")},
+                                    int(meta.get("bases", 0)))
         if kind == TRAJECTORY:
             return ReplayPolicy(Trajectory.load(p))
         raise ConfigError(f"{path} holds no kintsugi policy (kind {kind!r}; known: {TRAJECTORY}, {LINEAR})")
