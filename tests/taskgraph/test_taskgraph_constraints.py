@@ -96,6 +96,14 @@ GOLDEN = [
     ({"kind": "within", "point": {"entity": "corner"}, "container": "tray", "margin": 0.01}, -0.01),
     ({"kind": "within", "point": {"entity": "beyond"}, "container": "tray"}, 0.02),
     ({"kind": "within", "point": {"entity": "in_bin"}, "container": "bin"}, math.hypot(0.03, 0.03) - 0.04),
+    # offset: a - b inside a box (left_of, a stack's gap); spacing: a horizontal distance within a band (beside).
+    ({"kind": "offset", "a": {"entity": "cup"}, "b": {"entity": "bottle"}, "lo": [0.05, -0.01, -1.0],
+      "hi": [0.2, 0.01, 1.0]}, -0.01),
+    ({"kind": "offset", "a": {"entity": "cup"}, "b": {"entity": "bottle"}, "lo": [0.12, -0.01, -1.0],
+      "hi": [0.2, 0.01, 1.0]}, 0.02),
+    ({"kind": "spacing", "a": {"entity": "cup"}, "b": {"entity": "bottle"}, "min_m": 0.08, "max_m": 0.25}, -0.02),
+    ({"kind": "spacing", "a": {"entity": "cup"}, "b": {"entity": "bottle"}, "min_m": 0.12, "max_m": 0.25}, 0.02),
+    ({"kind": "spacing", "a": {"entity": "cup"}, "b": {"entity": "bottle"}, "max_m": 0.07}, 0.03),
 ]
 
 

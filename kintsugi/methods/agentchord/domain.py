@@ -66,6 +66,13 @@ SIDE_AIM_M = 0.15
 """Where a place beside an object aims: this far to its side (the middle of SIDE_M)."""
 BESIDE_M_RANGE = (0.08, 0.25)
 """`beside(x, y)`: the centres this far apart horizontally, either side."""
+ARM_BASES = {"left": (-0.05, 0.30), "right": (-0.05, -0.30)}
+"""The robot's description: where each arm's base stands (the default robot: bases 0.6 m apart at x = -0.05)."""
+REACH_M = 0.72
+"""How far from its base an arm takes an object on the table (upper arm and forearm 0.75 m, less a margin)."""
+FAR_COST = 120.0
+"""Extra cost of taking an object with the arm whose base is the farther from it (reaching across the body
+is longer and nearer the arm's limits): the arm is chosen by reach and cost, not by the order of the arms."""
 STACK_RISE_M = 0.05
 """After setting an object down on another, the hand rises this far before it goes home (it does not drag
 the top object off)."""
@@ -121,6 +128,9 @@ PREDICATES = [
         {"kind": "above", "a": {"entity": "?2", "feature": "top"}, "b": {"entity": "?1", "feature": "bottom"},
          "min_gap": 0.0}]),
     _p("moved", ["object"], "the object was carried away from where it was first seen"),
+    _p("reaches", ["arm", "object"], "the object lies within the arm's reach (its perceived centre within the "
+       "domain's reach_m of the arm's base)"),
+    _p("nearer", ["arm", "object"], "no other arm's base is nearer to the object"),
     _p("on", ["object", "object"], "the first object rests on top of the second (stacked): its centre within the "
        "second's perceived footprint, its bottom at the second's top",
        [{"kind": "within", "point": {"entity": "?1"}, "container": "?2", "margin": ON_MARGIN_M},
@@ -295,6 +305,22 @@ def _beside(name: str, side: str, sign: float) -> OperatorSpec:
                "is perceived when the place runs), release it, back away")
 
 
+def _by_reach(ops: list[OperatorSpec]) -> list[OperatorSpec]:
+    """Each one-arm operator that takes an object from the table, twice: by the nearer arm, and by the other at
+    FAR_COST more; both only when the arm reaches the object. Same name: the plan reads the same."""
+    out = []
+    for op in ops:
+        takes = "released(?obj)" in op.pre and list(op.params.values()).count("arm") == 1 and A in op.params
+        if not takes:
+            out.append(op)
+            continue
+        pre = [*op.pre, "reaches(?arm, ?obj)"]
+        out.append(op.model_copy(update={"pre": [*pre, "nearer(?arm, ?obj)"]}))
+        out.append(op.model_copy(update={"pre": [*pre, "not nearer(?arm, ?obj)"], "cost": op.cost + FAR_COST}))
+    return out
+
+
+OPERATORS[:] = _by_reach(OPERATORS)
 OPERATORS += [
     _op("stack", {A: "arm", O: "object", C: "object"},
         ["holding(?arm, ?obj)", "lifted(?obj)", "released(?box)", "on_table(?box)", "flat(?box)",
@@ -313,4 +339,5 @@ TABLETOP_DOMAIN = Domain(predicates=PREDICATES, operators=OPERATORS,
                          relative_places={"beside_left": (0.0, BESIDE_M), "beside_right": (0.0, -BESIDE_M)},
                          max_grasp_width_m=0.10,
                          directions={"away": 0.0, "toward": 180.0, "leftward": 90.0, "rightward": -90.0},
-                         aliases={"held_up": ["lifted(?x)", "not released(?x)"]})
+                         aliases={"held_up": ["lifted(?x)", "not released(?x)"]},
+                         arm_bases=ARM_BASES, reach_m=REACH_M)

@@ -58,12 +58,34 @@ def observed_facts(request: Any, domain: Domain, places: list[str] = ()) -> Stat
             yaw, tol = head_yaw_deg(o), heading_tol_deg(domain)
             facts |= {("heading", o.name, d) for d, psi in domain.directions.items()
                       if yaw is not None and abs(wrap_deg(yaw - psi)) <= tol}
+    facts |= reach_facts(request, domain, known)
     for p in places:
         if "direction" in known and p in domain.directions:
             facts.add(("direction", p))
         elif "region" in known:
             facts.add(("region", p))
     return frozenset(facts)
+
+
+def reach_facts(request: Any, domain: Domain, known: set[str]) -> set[Atom]:
+    """`reaches(arm, obj)`: the object's perceived centre within the arm's reach of its base (the robot's
+    description in the domain); `nearer(arm, obj)`: no other arm's base is nearer to it. None without bases."""
+    import math
+
+    out: set[Atom] = set()
+    bases = {a.name: domain.arm_bases[a.name] for a in request.arms if a.name in domain.arm_bases}
+    if not bases:
+        return out
+    for o in request.objects:
+        if not o.visible or o.centroid is None:
+            continue
+        d = {a: math.hypot(o.centroid[0] - b[0], o.centroid[1] - b[1]) for a, b in bases.items()}
+        for a, dist in d.items():
+            if "reaches" in known and dist <= domain.reach_m:
+                out.add(("reaches", a, o.name))
+            if "nearer" in known and dist <= min(d.values()) + 1e-9:
+                out.add(("nearer", a, o.name))
+    return out
 
 
 def heading_tol_deg(domain: Domain) -> float:

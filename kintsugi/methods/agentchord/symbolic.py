@@ -15,6 +15,7 @@ from collections.abc import Iterable
 from dataclasses import dataclass
 
 from kintsugi.core.errors import ReasoningError
+from kintsugi.methods.agentchord.bounds import _achiever_bounds, _bits, _bound, _may_reach  # noqa: F401
 from kintsugi.methods.agentchord.types import Domain, OperatorSpec, parse_atom
 
 Atom = tuple[str, ...]
@@ -318,6 +319,9 @@ def _search(initial: State, goals: list[Goal], table: OpTable, max_expansions: i
         return least if waiting else 0.0
 
     start = m.of(initial)
+    waiting = [i for i in waiting if _may_reach(start, targets[i], steps_of, m, chosen)]
+    if not waiting:  # every goal is out of reach even ignoring deletes: no search (it would use its budget up)
+        return found, False
     counter = itertools.count()
     frontier: list[tuple[float, int, float, int]] = [(h(start), next(counter), 0.0, start)]
     best: dict[int, float] = {start: 0.0}
@@ -357,45 +361,6 @@ def _search(initial: State, goals: list[Goal], table: OpTable, max_expansions: i
                 if f < float("inf"):
                     heapq.heappush(frontier, (f, next(counter), c, t))
     return found, False
-
-
-def _achiever_bounds(goal: Goal, table: OpTable, m: _Masks, searched: int
-                     ) -> tuple[int, int, list[tuple[float, int, bool, int]]]:
-    """A* heuristic's table for one goal: its masks, and per literal (dearest first) the cheapest step that
-    makes it true (adds a needed atom, deletes a forbidden one), the atom's bit, whether it must be present,
-    and the steps that can make it true (a bit per operator of the table, only those `searched`)."""
-    out = []
-    for atoms, present in ((goal[0], True), (goal[1], False)):
-        for a in atoms:
-            b = m.bit[a]
-            makers = searched & (table.adders.get(a, 0) if present else
-                                 sum(1 << i for i in range(len(table.ops)) if not m.keep[i] & b))
-            out.append((min((table.ops[i].cost for i in _bits(makers)), default=INF), b, present, makers))
-    out.sort(key=lambda x: -x[0])
-    return m.of(goal[0]), m.of(goal[1]), out
-
-
-def _bound(s: int, literals: list[tuple[float, int, bool, int]]) -> float:
-    """A lower bound on the cost from state `s` to the goal of `literals` (`_achiever_bounds`): the missing
-    literals taken dearest first, each counted when none of the steps that make it true could make one already
-    counted true. No step serves two counted literals, so a plan needs a distinct step for each, and the sum of
-    their cheapest costs never overestimates (admissible: plans stay cheapest). It is at least the dearest
-    missing literal's cost, the bound this planner used before: a rearrange-table plan grasps, carries and
-    places each utensil, and with the dearest step alone A* walked five times as many states."""
-    total, used = 0.0, 0
-    for cost, b, present, makers in literals:
-        if ((not s & b) if present else s & b) and not makers & used:
-            total += cost
-            used |= makers
-    return total
-
-
-def _bits(x: int) -> Iterable[int]:
-    """The indices of the set bits of `x`."""
-    while x:
-        low = x & -x
-        yield low.bit_length() - 1
-        x ^= low
 
 
 def relevant(ops: "list[GroundOp] | OpTable", goal: Goal) -> list[GroundOp]:

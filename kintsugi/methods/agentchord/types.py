@@ -106,6 +106,10 @@ class Domain(StrictModel):
     """One gripper's widest opening: an object narrower than this (its smaller horizontal extent) is `narrow`."""
     directions: dict[str, float] = Field(default_factory=dict, max_length=16)
     """Direction names a heading goal may use -> yaw in degrees (0 = +x, away from the robot)."""
+    arm_bases: dict[str, tuple[float, float]] = Field(default_factory=dict, max_length=2)
+    """The robot's description: each arm's base (x, y, metres, world frame), for which arm reaches what."""
+    reach_m: float = Field(0.7, gt=0.0, le=5.0)
+    """How far (horizontally, from its base) an arm reaches an object on the table."""
     aliases: dict[str, list[Literal_]] = Field(default_factory=dict, max_length=16)
     """Goal words that stand for a conjunction of the domain's literals, its parameters (`?x`, ...) in order of
     appearance for the arguments: `held_up(x)` -> `lifted(x)`, `not released(x)` (in a hand, clear of the table)."""
