@@ -29,6 +29,8 @@ from kintsugi.core.record import SkillLog
 from kintsugi.methods.agentchord.conducting import ConductorConfig, ConductorError, Metrics, objects_of, proprioceptive
 from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes
 from kintsugi.methods.agentchord.observe import ARMS, features
+from kintsugi.methods.agentchord.pouring import Pouring
+from kintsugi.methods.agentchord.reaching import Reaching, Unreachable
 from kintsugi.methods.agentchord.recovering import Recovering
 from kintsugi.methods.agentchord.settling import SETTLE_TRIES, Settling
 from kintsugi.methods.agentchord.synthesis import EdgeSynthesis
@@ -40,7 +42,7 @@ from kintsugi.taskgraph.model import Edge, TaskGraph
 from kintsugi.taskgraph.monitor import Firing, MonitorBank
 
 
-class Conductor(Recovering, Settling):
+class Conductor(Recovering, Settling, Reaching, Pouring):
     """Runs one compiled graph to its goal: nominal edges under their monitors, recoveries (`Recovering`) after
     a firing, settles (`Settling`) before a recovery or the goal check reads the scene."""
 
@@ -71,12 +73,24 @@ class Conductor(Recovering, Settling):
         self.goal_objects = {e for c in graph.node(graph.goal).constraints for e, role, _ in c.refs() if role != "arm"}
         """The objects the goal check reads: a settle waits for them too (the dropped object may have knocked one),
         so a recovery that merges straight into the goal need not wait again."""
+        self.pours: dict[tuple[str, str], bool] = {}
+        """(object, container) of every pour sub-goal reached -> seen done (`Pouring`)."""
         self._rested: tuple[int, frozenset[str]] | None = None
         """(control step, objects) of the last read that found those objects at rest."""
 
     # --- running ------------------------------------------------------------------
     def run(self) -> bool:
-        """Traverse the graph to its goal; the framework verdict: the goal reached and its constraints hold."""
+        """Traverse the graph to its goal; the framework verdict: the goal reached and its constraints hold.
+        An action no arm can carry out (out of reach, its object out of the cameras' view) or a spent budget
+        ends the trial as a recorded failure with the reason, never a trial error."""
+        try:
+            return self._traverse()
+        except (KeyframeError, ConductorError) as exc:
+            kind = "unreachable" if isinstance(exc, Unreachable) else "failed"
+            self.log.event(self.robot.sim_time, kind, f"{exc}; the trial ends as a failure")
+            return False
+
+    def _traverse(self) -> bool:
         g, node = self.graph, self.graph.start
         while node != g.goal:
             edge = next_edge(g, node, self.ctg)
@@ -152,6 +166,7 @@ class Conductor(Recovering, Settling):
         finally:
             if watch is not None:
                 observers.remove(watch)
+        self.verify_pour(edge)
         return None
 
     def _already_open(self, arm: Any) -> bool:
@@ -215,6 +230,8 @@ class Conductor(Recovering, Settling):
             self.metrics.recovery_latency_steps.append(self.robot_steps() - self.metrics.fired_at)
             self.metrics.fired_at = None
         result = self.robot.execute(call)
+        if result.ik_failed and not unplanned_ok:
+            result, call = self.reach_otherwise(edge, call, result)
         if name == "grasp" and isinstance(call.get("obj"), str):
             self.synthesis.grasp_outcome(call)
         arm_states = {a: self.robot.arm_state(a) for a in ARMS}
@@ -236,7 +253,7 @@ class Conductor(Recovering, Settling):
         if not result.planned and unplanned_ok:
             return False
         if result.ik_failed:
-            raise KeyframeError(f"{edge.id} {name}: {result.message}")
+            raise Unreachable(f"{edge.id} {name}: {result.message}")
         if not result.planned:  # e.g. the object left the cameras' view (fell off the table): nothing moved, and
             # running it again in the same still scene would only refuse again
             raise ConductorError(f"{edge.id} {name} cannot be carried out: {result.message}")
@@ -283,4 +300,4 @@ class Conductor(Recovering, Settling):
         if bad or unknown:
             self.log.event(self.robot.sim_time, "goal check", f"goal {goal.id!r}: violated {', '.join(bad) or '-'}; "
                            f"undecided {', '.join(unknown) or '-'}")
-        return not bad
+        return not bad and self.pours_done()

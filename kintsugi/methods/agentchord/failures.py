@@ -53,6 +53,9 @@ def _drop(s: State, arm: str, obj: str) -> State:
     return frozenset(keep | {("hand_empty", a) for a in holders} | {("on_table", obj), ("released", obj), pose})
 
 
+KNOCKED = frozenset({"missed_grasp", "object_moved", "toppled"})
+"""Grasp-time failures after which a standing object may lie knocked over (a `knock`) or still stand where it
+was pushed (a `shift`): the recovery first lets it come to rest, then stands it up or re-grasps it where it is."""
 LANDED_DEG = 15.0
 """After a fall, an object whose axis is within this of vertical landed standing (the `upright` predicate's
 tolerance), else lying (or leaning: it is stood up the same way)."""
@@ -62,8 +65,10 @@ def outcomes(mode: FailureMode, s: State, arm: str, obj: str) -> list[tuple[str,
     """What the failure may leave, each with the guard (over perceived features) that tells it apart at run
     time: an object that stands on a base (`stands`) and falls may land standing or lying on its side."""
     after = mode.after(s, arm, obj)
-    if mode.after is not _drop or ("stands", obj) not in s:
+    if ("stands", obj) not in s or not (mode.after is _drop or mode.name in KNOCKED):
         return [("", after, [])]
+    if mode.name in KNOCKED:  # a grasp that missed or met a moved or toppled object: it may lie knocked over
+        after = frozenset(after | {("upright", obj)})
     lying = frozenset(a for a in after if a != ("upright", obj))
     return [("standing", after, [{"kind": "upright", "object": obj, "tol_deg": LANDED_DEG}]),
             ("lying", lying, [{"kind": "tilted", "object": obj, "min_deg": LANDED_DEG}])]

@@ -91,7 +91,11 @@ class AgentChord:
             planning_calls = len(reasoner.records)
             keyframes = TabletopKeyframes(cfg)
             t0 = time.perf_counter()
-            compiled_kf = self._compile_keyframes(compiled, keyframes, first)
+            try:
+                compiled_kf = self._compile_keyframes(compiled, keyframes, first)
+            except KeyframeError as exc:  # out of reach before anything moves: a recorded failure, not an error
+                log.event(robot.sim_time, "unreachable", f"{exc}; the trial ends as a failure before it moves")
+                return False
             compiled.timings_s["keyframes"] = time.perf_counter() - t0
             g = compiled.graph
             log.event(robot.sim_time, "compiled", f"{len(g.nodes)} nodes, {len(g.edges)} edges, "

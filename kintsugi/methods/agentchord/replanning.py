@@ -21,9 +21,11 @@ from typing import Any, Literal
 from kintsugi.core.errors import ConfigError
 from kintsugi.core.registry import METHODS
 from kintsugi.methods.agentchord.compile import compile_graph, persistent_monitors
-from kintsugi.methods.agentchord.conducting import ConductorConfig, Metrics, firing_arm
+from kintsugi.methods.agentchord.conducting import ConductorConfig, ConductorError, Metrics, firing_arm
 from kintsugi.methods.agentchord.conductor import Conductor
-from kintsugi.methods.agentchord.keyframes import TabletopKeyframes
+from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes
+from kintsugi.methods.agentchord.reaching import Unreachable
+from kintsugi.methods.agentchord.symbolic import PlanningError
 from kintsugi.methods.agentchord.method import LatencySettings, RunFigures
 from kintsugi.methods.agentchord.observe import seen_arms, seen_objects
 from kintsugi.methods.agentchord.tops import Heads, Tops
@@ -73,6 +75,11 @@ class Replanning:
                     log.event(robot.sim_time, "replan", "the composer finds the goal already holds")
                     ok = True
                     break
+                except PlanningError as exc:
+                    if attempt == 0:
+                        raise
+                    log.event(robot.sim_time, "replan refused", f"{exc}; the trial ends as a failure")
+                    break
                 self.node_facts = composed.node_facts
                 if attempt == 0:
                     planning_calls = len(self.reasoner.records)
@@ -83,7 +90,12 @@ class Replanning:
                                       config=ConductorConfig(on_failure="backtrack", max_recoveries=0),
                                       metrics=metrics, tops=self.tops, heads=self.heads, seen=self.seen)
                 conductor.after_action = self._after_action(graph) if self.style == "doremi" else None
-                ok, failed = self._conduct(conductor, graph)
+                try:
+                    ok, failed = self._conduct(conductor, graph)
+                except (KeyframeError, ConductorError, PlanningError) as exc:  # a spent budget, a lost object
+                    log.event(robot.sim_time, "failed", f"{exc}; the trial ends as a failure")
+                    ok = False
+                    break
                 if not failed:
                     break
                 metrics.recoveries += 1
@@ -131,7 +143,11 @@ class Replanning:
         node = graph.start
         while node != graph.goal:
             edge = next_edge(graph, node, conductor.ctg)
-            firing = conductor.run_edge(edge, with_monitors=True)
+            try:
+                firing = conductor.run_edge(edge, with_monitors=True)
+            except Unreachable as exc:  # a failed action (nothing moved): re-plan from what the cameras see now
+                self.log.event(self.robot.sim_time, "unreachable", str(exc))
+                return False, f"unreachable action on {edge.id}"
             if firing is not None:
                 self._settle(conductor, edge, firing_arm(edge, firing))
                 return False, f"{firing.failure_mode} on {edge.id}"

@@ -193,9 +193,10 @@ class TabletopRobot:
         return self._world.render(camera)
 
     # --- acting -------------------------------------------------------------------
-    def execute(self, action: dict[str, Any] | Any) -> ActionResult:
+    def execute(self, action: dict[str, Any] | Any, plan_only: bool = False) -> ActionResult:
         """Validate, plan (all IK up front), then move. Bad input raises ActionError before any motion;
-        an unreachable target returns ik_failed=True without moving."""
+        an unreachable target returns ik_failed=True without moving. `plan_only`: stop after planning (whether
+        the arm can do it, and whether a target had to be clipped to the workspace), nothing moves."""
         if isinstance(action, dict):
             action = parse_action(action, self.objects)
         parts = [a for a in (action.left, action.right) if a is not None] if isinstance(action, Drive) else [action]
@@ -214,6 +215,10 @@ class TabletopRobot:
         except PlanError as exc:
             return ActionResult(action=action.action, arms=arms, reached=False, planned=False, ik_failed=exc.ik_failed,
                                 clipped=exc.clipped, message=str(exc))
+        if plan_only:
+            return ActionResult(action=action.action, arms=arms, reached=False, clipped=self._planner.clipped,
+                                message="planned" + (", target clipped to the workspace" if self._planner.clipped
+                                                     else ""))
         if self._hook is not None:
             planned = max(planned_duration(s, self._world.joint_targets(a), self._motion) for a, s in programs.items())
             self._hook.begin_action(planned, arms)
