@@ -15,8 +15,8 @@ disturbances), and steps it one control period per `step(action)` through the st
   `truncated` after `max_seconds` of sim time;
 - `info`: the record's common fields (task, condition, seed, success, sim_time, physics_steps, steps)
   and the drawn `params` at reset.
-The scorer is asked every `score_every` control steps (and on the last): scoring reads contacts, and
-asking it at 100-250 Hz would cost more than the physics.
+The scorer is asked every `score_every_s` of sim time (0.2 s; and on the last step): scoring reads contacts
+and poses, and asking it at 100-250 Hz would cost more than the physics.
 """
 
 from __future__ import annotations
@@ -46,7 +46,7 @@ class KintsugiEnv(gym.Env):
 
     def __init__(self, task: str, condition: str | None = None, variant: str | None = None,
                  overrides: dict[str, Any] | None = None, images: bool = True, reward: str = "sparse",
-                 shaped_scale: float = 0.01, max_seconds: float | None = None, score_every: int = 10,
+                 shaped_scale: float = 0.01, max_seconds: float | None = None, score_every_s: float = 0.2,
                  period_s: float = 2.0, render_mode: str | None = None) -> None:
         load_builtins()
         self.task = TASKS.get(task).factory()
@@ -63,7 +63,7 @@ class KintsugiEnv(gym.Env):
         if render_mode not in (None, "rgb_array"):
             raise KintsugiError(f"render_mode must be None or 'rgb_array', not {render_mode!r}")
         self.images, self.reward_kind, self.shaped_scale = images, reward, shaped_scale
-        self.score_every, self.period_s, self.render_mode = max(1, score_every), period_s, render_mode
+        self.score_every_s, self.period_s, self.render_mode = score_every_s, period_s, render_mode
         self.max_seconds = max_seconds if max_seconds is not None else _default_seconds(self.cfg)
         self.episode: Any = None
         self.driver: Driver | None = None
@@ -73,6 +73,7 @@ class KintsugiEnv(gym.Env):
         self.action_space = spaces.Box(d.action_low.astype(np.float32), d.action_high.astype(np.float32),
                                        dtype=np.float32)
         self.action_names = d.action_names
+        self.score_every = max(1, round(score_every_s * d.control_hz))
 
     def _open(self, seed: int) -> None:
         if self.episode is not None:
@@ -106,10 +107,12 @@ class KintsugiEnv(gym.Env):
             if bool(self.episode.score()[0]):
                 self._succeeded = True
                 reward = 1.0
-        if self.reward_kind == "shaped" and self._last_action is not None:
-            span = np.maximum(d.action_high - d.action_low, 1e-9)
-            reward -= self.shaped_scale * float(np.abs((a - self._last_action) / span).mean())
-        self._last_action = d.clip(a)
+        if self.reward_kind == "shaped":
+            a = d.clip(a)
+            if self._last_action is not None:
+                span = np.maximum(d.action_high - d.action_low, 1e-9)
+                reward -= self.shaped_scale * float(np.abs((a - self._last_action) / span).mean())
+            self._last_action = a
         terminated = self._succeeded or error is not None
         obs = d.observe(self.images) if error is None else self._zeros()
         return obs, reward, terminated, truncated and not terminated, self._info() | ({"error": error} if error else {})

@@ -62,9 +62,9 @@ class Driver(ABC):
         if a.shape != (len(self.action_names),):
             raise DriverError(f"a {self.family} action has {len(self.action_names)} values "
                               f"({', '.join(self.action_names)}), not {a.size}")
-        if not np.all(np.isfinite(a)):
+        if not np.isfinite(a).all():
             raise DriverError(f"a {self.family} action must be finite, got {a.tolist()}")
-        return np.clip(a, self.action_low, self.action_high)
+        return np.minimum(np.maximum(a, self.action_low), self.action_high)
 
     @abstractmethod
     def apply(self, action: Any) -> None:
