@@ -63,6 +63,10 @@ def run(
         spec = expand(cfg)[0].model_copy(update={"video": str(check_video_path(video)) if video else None})
         path = check_output_file(record or _record_path(spec), "record", (".json",))
         check_output_file(record or _record_path(spec, reasoned=False), "record", (".json",))
+        from kintsugi.reasoning.preflight import preflight
+
+        for note in preflight([spec]):  # stops here when the endpoint cannot serve the method's roles
+            err_console.print(escape(f"preflight: {note}"))
     except KintsugiError as exc:
         _fail(exc)
         return
@@ -211,6 +215,8 @@ def graph(
     out: Annotated[Optional[Path], typer.Option(help="picture .png (default: runs/graph_<task>.png)")] = None,
     dot: Annotated[Optional[Path], typer.Option(help="also write the graph as a graphviz .dot file")] = None,
     json_out: Annotated[Optional[Path], typer.Option("--json", help="also write the graph as JSON")] = None,
+    html_out: Annotated[Optional[Path], typer.Option(
+        "--html", help="also write an interactive page (zoom, pan, every box's details on hover)")] = None,
     set_: SetOpt = None,
     reasoner: ReasonerOpt = "embedded",
     model: ModelOpt = None,
@@ -220,14 +226,15 @@ def graph(
     plugin: PluginOpt = None,
 ) -> None:
     """Compile a task's recovery-augmented task graph (composer, arranger, Eq. 8) from its first observation;
-    print it and draw it (nominal solid blue, recovery dashed pink)."""
+    print it and draw it, top to bottom with no overlapping boxes (nominal solid blue, recovery dashed pink)."""
     _plugins(plugin)
     from kintsugi.methods.agentchord.show import compile_for_task, print_graph
     from kintsugi.core.outputs import check_output_file
 
     try:
         png = check_output_file(out or Path("runs") / f"graph_{task}.png", "picture", (".png",))
-        extra = [(p, k, s) for p, k, s in ((dot, "dot file", ".dot"), (json_out, "graph JSON", ".json")) if p]
+        extra = [(p, k, s) for p, k, s in ((dot, "dot file", ".dot"), (json_out, "graph JSON", ".json"),
+                                           (html_out, "graph page", ".html")) if p]
         paths = [check_output_file(p, k, (s,)) for p, k, s in extra]
         compiled = compile_for_task(task, condition, seed, _overrides(set_),
                                     _reasoner(reasoner, model, base_url, api_key_env, structured_output))
@@ -235,14 +242,15 @@ def graph(
         _fail(exc)
         return
     print_graph(compiled, console)
-    from kintsugi.taskgraph.render import to_dot, write_graph_picture
+    from kintsugi.taskgraph.render import graph_html, to_dot, write_graph_picture
 
+    writers = {"dot file": to_dot, "graph JSON": lambda g: g.to_json(indent=2), "graph page": graph_html}
     try:
         png.parent.mkdir(parents=True, exist_ok=True)
         write_graph_picture(compiled.graph, png)
         for (_, kind, _), path in zip(extra, paths):
             path.parent.mkdir(parents=True, exist_ok=True)
-            path.write_text(to_dot(compiled.graph) if kind == "dot file" else compiled.graph.to_json(indent=2))
+            path.write_text(writers[kind](compiled.graph))
     except OSError as exc:
         _fail(f"cannot write the graph files: {exc}")
     console.print(escape("picture: " + ", ".join(str(p) for p in [png, *paths])))

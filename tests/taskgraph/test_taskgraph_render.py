@@ -10,7 +10,7 @@ from matplotlib.image import imread
 from kintsugi.taskgraph import to_dot, write_graph_picture
 from kintsugi.taskgraph.forward import forward_filter
 from kintsugi.taskgraph.model import TaskGraph
-from kintsugi.taskgraph.render import NOMINAL, RECOVERY, layout
+from kintsugi.taskgraph.render import NOMINAL, RECOVERY, boxes
 from tests.taskgraph_fixtures import pour_graph, pour_graph_data
 
 
@@ -30,10 +30,13 @@ def test_dot_styles_and_escaping():
     assert "m_drop: drop -> r_pick" in dot and "m_vis: tracking_lost -> detect only" in dot
 
 
-def test_layout_layers_nominal_and_offsets_recovery():
-    pos = layout(pour_graph())
-    assert [pos[n][0] for n in ("home", "grasped", "over_cup", "poured", "done")] == [0, 1, 2, 3, 4]
-    assert pos["regrasp"][0] == 1.5 and pos["regrasp"][1] < 0 and pos["reset"][1] < pos["regrasp"][1]
+def test_layout_layers_nominal_top_down_with_recovery_beside_and_no_overlaps():
+    placed = boxes(pour_graph())
+    ys = [placed[n].y for n in ("home", "grasped", "over_cup", "poured", "done")]
+    assert ys == sorted(ys) and len(set(ys)) == 5
+    assert placed["regrasp"].y > placed["grasped"].y and placed["regrasp"].kind == "recovery"
+    items = list(placed.values())
+    assert not [(a.key, b.key) for i, a in enumerate(items) for b in items[i + 1:] if a.overlaps(b)]
 
 
 def test_picture_is_written(tmp_path):
