@@ -25,6 +25,9 @@ class ConductorConfig(StrictModel):
     """Atomic actions per episode before the conductor gives up (a recovery loop never ends a trial hanging)."""
     max_recoveries: int = 10
     """Recoveries (or backtracks) per episode before the conductor gives up."""
+    max_replans: int = 2
+    """Re-plans from the current observation when a recovery keeps failing its merge check (the paper's
+    fallback; each costs the planning calls again), before the trial ends as a failure."""
     on_failure: Literal["branch", "backtrack"] = "branch"
     """branch: the pre-compiled forward recovery (AgentChord); backtrack: back to the latest nominal node whose
     sub-goal still holds and re-run the nominal edges from there (AC-BT, ReKep-style)."""
@@ -40,6 +43,8 @@ class Metrics:
     """Per recovery: control steps from the monitor's firing to the recovery's first command."""
     firings: list[str] = field(default_factory=list)
     keyframe_solves: int = 0
+    replans: int = 0
+    """Fallback re-plans (a recovery that kept failing its merge check)."""
     fired_at: int | None = None
     """Control step of the latest firing whose recovery has not issued its first command yet."""
 

@@ -33,6 +33,7 @@ from kintsugi.methods.agentchord.pouring import Pouring
 from kintsugi.methods.agentchord.reaching import Reaching, Unreachable
 from kintsugi.methods.agentchord.recovering import Recovering
 from kintsugi.methods.agentchord.settling import SETTLE_TRIES, Settling
+from kintsugi.methods.agentchord.symbolic import PlanningError
 from kintsugi.methods.agentchord.synthesis import EdgeSynthesis
 from kintsugi.methods.agentchord.tops import Heads, Tops
 from kintsugi.perception.features import ObjectFeatures
@@ -40,6 +41,20 @@ from kintsugi.taskgraph.features import Features
 from kintsugi.taskgraph.forward import cost_to_go, next_edge
 from kintsugi.taskgraph.model import Edge, TaskGraph
 from kintsugi.taskgraph.monitor import Firing, MonitorBank
+
+
+MERGE_FAILS = 2
+"""A recovery whose merge check fails this many times on one edge falls back to re-planning."""
+REPLANNED = object()
+VERDICT_UPRIGHT_DEG = 8.0
+"""The goal check's `upright` tolerance at most: stricter than the tabletop scorers' 10 degrees by perception's
+error on a standing object's axis, so the method never calls a leaning object upright when a judge would not."""
+
+
+def strict(constraints: Any) -> list:
+    """The goal's constraints as the verdict reads them: `upright` no looser than VERDICT_UPRIGHT_DEG."""
+    return [c.model_copy(update={"tol_deg": min(c.tol_deg, VERDICT_UPRIGHT_DEG)}) if c.kind == "upright" else c
+            for c in constraints]
 
 
 class Conductor(Recovering, Settling, Reaching, Pouring):
@@ -73,6 +88,10 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
         self.goal_objects = {e for c in graph.node(graph.goal).constraints for e, role, _ in c.refs() if role != "arm"}
         """The objects the goal check reads: a settle waits for them too (the dropped object may have knocked one),
         so a recovery that merges straight into the goal need not wait again."""
+        self.replan: Callable[[], TaskGraph | None] | None = None
+        """The fallback when a recovery keeps failing its merge check: a graph compiled from the current
+        observation (None: the goal already holds), set by the method."""
+        self.merge_failed = False
         self.pours: dict[tuple[str, str], bool] = {}
         """(object, container) of every pour sub-goal reached -> seen done (`Pouring`)."""
         self._rested: tuple[int, frozenset[str]] | None = None
@@ -84,14 +103,19 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
         An action no arm can carry out (out of reach, its object out of the cameras' view) or a spent budget
         ends the trial as a recorded failure with the reason, never a trial error."""
         try:
-            return self._traverse()
+            while True:
+                outcome = self._traverse()
+                if outcome is not REPLANNED:
+                    return bool(outcome)
         except (KeyframeError, ConductorError) as exc:
             kind = "unreachable" if isinstance(exc, Unreachable) else "failed"
             self.log.event(self.robot.sim_time, kind, f"{exc}; the trial ends as a failure")
             return False
 
-    def _traverse(self) -> bool:
+    def _traverse(self) -> Any:
+        """One traversal of the current graph: the verdict, or REPLANNED when it fell back to a new graph."""
         g, node = self.graph, self.graph.start
+        merge_fails = 0
         while node != g.goal:
             edge = next_edge(g, node, self.ctg)
             if edge is None:
@@ -117,13 +141,45 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
                     self.log.event(self.robot.sim_time, "gave up", f"{firing.failure_mode} on {edge.id} after "
                                    f"{self.config.max_recoveries} recoveries")
                     return False
+                self.merge_failed = False
                 node = self._run_recovery(edge, firing)
-                if node is None:  # the recovery was itself disturbed (a drop, a missed grasp): run it again
-                    continue
-                # Read the failed edge's monitors again only where they still apply (a merge past its target,
-                # e.g. a release straight to the goal, leaves the hand empty on purpose).
-                firing = self._recheck(edge) if node == edge.target else None
+                if node is not None:
+                    # Read the failed edge's monitors again only where they still apply (a merge past its target,
+                    # e.g. a release straight to the goal, leaves the hand empty on purpose).
+                    firing = self._recheck(edge) if node == edge.target else None
+                    self.merge_failed = firing is not None
+                merge_fails += self.merge_failed
+                if merge_fails >= MERGE_FAILS:  # the branch does not hold: the paper's fallback
+                    return self.fall_back(edge, firing)
+                # else a recovery that was itself disturbed (a drop, a missed grasp) runs again
         return self.goal_holds()
+
+    def fall_back(self, edge: Edge, firing: Firing | None) -> Any:
+        """Re-plan from the current observation (`replan`, at most `max_replans` times): REPLANNED with the new
+        graph adopted, or False (recorded) when there is no re-planner or its budget is spent."""
+        why = f"the recovery of {edge.id} failed its merge check {MERGE_FAILS} times"
+        if self.replan is None or self.metrics.replans >= self.config.max_replans:
+            self.log.event(self.robot.sim_time, "gave up", f"{why}; no re-plan left")
+            return False
+        self.metrics.replans += 1
+        self.log.event(self.robot.sim_time, "replan", f"{why}; re-planning from the current observation "
+                       f"({self.metrics.replans} of {self.config.max_replans})")
+        try:
+            graph = self.replan()
+        except PlanningError as exc:
+            self.log.event(self.robot.sim_time, "replan refused", f"{exc}; the trial ends as a failure")
+            return False
+        if graph is None:
+            self.log.event(self.robot.sim_time, "goal check", "the re-planner finds the goal already holds")
+            return self.goal_holds()
+        self.adopt(graph)
+        return REPLANNED
+
+    def adopt(self, graph: TaskGraph) -> None:
+        """Conduct `graph` from its start from now on (the trackers and counters carry over)."""
+        self.graph, self.ctg = graph, cost_to_go(graph)
+        self.synthesis.graph = graph
+        self.goal_objects = {e for c in graph.node(graph.goal).constraints for e, role, _ in c.refs() if role != "arm"}
 
     def run_edge(self, edge: Edge, with_monitors: bool, stop: Callable[[Any], bool] | None = None) -> Firing | None:
         """Run the edge's actions under its monitors; the first firing, or None. `stop(action)`, asked after
@@ -294,7 +350,7 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
                                f"{SETTLE_TRIES} reads; the goal is not reached at rest")
                 return False
         f = self._read(names)
-        values = [(c.kind, c.evaluate(f)) for c in goal.constraints]
+        values = [(c.kind, c.evaluate(f)) for c in strict(goal.constraints)]
         bad = [k for k, v in values if v > 0.0]
         unknown = [k for k, v in values if v != v]  # NaN: perception could not decide
         if bad or unknown:

@@ -56,9 +56,10 @@ def _drop(s: State, arm: str, obj: str) -> State:
 KNOCKED = frozenset({"missed_grasp", "object_moved", "toppled"})
 """Grasp-time failures after which a standing object may lie knocked over (a `knock`) or still stand where it
 was pushed (a `shift`): the recovery first lets it come to rest, then stands it up or re-grasps it where it is."""
-LANDED_DEG = 15.0
-"""After a fall, an object whose axis is within this of vertical landed standing (the `upright` predicate's
-tolerance), else lying (or leaning: it is stood up the same way)."""
+LANDED_DEG = 10.0
+"""After a fall, an object whose axis is within this of vertical landed standing (no looser than a judge of
+uprightness is likely to be: the tabletop scorers allow 10 degrees), else lying (or leaning: it is stood up
+the same way)."""
 
 
 def outcomes(mode: FailureMode, s: State, arm: str, obj: str) -> list[tuple[str, State, list[dict]]]:

@@ -3,7 +3,9 @@
 A sub-goal with a `tilted` constraint on an object that its `over` constraints put above a container is a pour.
 When a nominal edge reaches it, the conductor reads the tilt (from the object's known top, as the checks do)
 and, if the turn fell short of `POUR_VERDICT_DEG` (a bottle that sat a little tilted in the hand, a grasp that
-slipped), turns the hand further by the shortfall, at most `TOP_UPS` times. The pour counts only when the tilt
+slipped), turns the hand further by the shortfall, at most `TOP_UPS` times; if the mouth is not over the
+container (it was slid away while the object was carried there), the hand moves over it, at most `RE_AIMS`
+times. The pour counts only when the tilt
 reached `POUR_VERDICT_DEG` with the mouth (the lower end of the object's axis) above the container's perceived
 opening; the goal check refuses a verdict of success while a pour it passed through was not seen done.
 `POUR_VERDICT_DEG` is stricter than the scorer's 80 degrees by the tilt perception's error on a held bottle.
@@ -22,6 +24,8 @@ POUR_VERDICT_DEG = 83.0
 TOP_UP_MARGIN_DEG = 4.0
 MAX_TOP_UP_DEG = 30.0
 TOP_UPS = 2
+RE_AIMS = 2
+MAX_RE_AIM_M = 0.15
 RIM_INSET_M = 0.008
 """The mouth must be this far inside the container's perceived outer radius (about a wall and a margin)."""
 
@@ -112,10 +116,32 @@ class Pouring:
             self._execute(edge, "rotate_eef", {**turns[-1].args, "angle_deg": round(sign * min(short, MAX_TOP_UP_DEG), 2)},
                           unplanned_ok=True)
             tilt, over, why = judge(pour, self._read({pour.obj, pour.container}).objects, self.tops.world.get(pour.obj))
+        for _ in range(RE_AIMS if turns else 0):  # the container moved (slid by a hand) while the bottle was carried
+            if over or not tilt == tilt or tilt < POUR_VERDICT_DEG:
+                break
+            shift = self.aim_shift(pour)
+            if shift is None:
+                break
+            self.log.event(self.robot.sim_time, "pour re-aimed", f"{why}: moving the hand "
+                           f"{np.round(shift * 100, 1).tolist()} cm over {pour.container}")
+            self._execute(edge, "move_by_offset", {"arm": turns[-1].args["arm"], "dxyz": [float(shift[0]),
+                          float(shift[1]), 0.0]}, unplanned_ok=True)
+            tilt, over, why = judge(pour, self._read({pour.obj, pour.container}).objects, self.tops.world.get(pour.obj))
         done = tilt == tilt and tilt >= POUR_VERDICT_DEG and over
         self.pours[(pour.obj, pour.container)] = self.pours.get((pour.obj, pour.container), False) or done
         if not done:
             self.log.event(self.robot.sim_time, "pour not seen", why)
+
+    def aim_shift(self, pour: Pour) -> np.ndarray | None:
+        """The horizontal move that puts the seen mouth over the container's seen centre (None: not seen, or
+        farther than MAX_RE_AIM_M, which is no slide a pour should follow)."""
+        objs = self._read({pour.obj, pour.container}).objects
+        f, box = objs.get(pour.obj), objs.get(pour.container)
+        m = mouth(f, self.tops.world.get(pour.obj)) if f is not None and getattr(f, "axis", None) is not None else None
+        if m is None or box is None or getattr(box, "centroid", None) is None:
+            return None
+        d = np.asarray(box.centroid[:2], float) - m[:2]
+        return d if float(np.linalg.norm(d)) <= MAX_RE_AIM_M else None
 
     def pours_done(self) -> bool:
         """Every pour the trial passed through was seen done (tilt and mouth over the opening)."""

@@ -117,6 +117,7 @@ class Recovering:
         bad = unmet(node, self._read(watched(node))) if node.constraints else None
         if bad is not None:
             self.metrics.fired_at = self.robot_steps()
+            self.merge_failed = True
             return f"{edge.target!r}: {bad} violated"
         return None
 

@@ -1,0 +1,45 @@
+"""A recovery that keeps failing its merge check falls back to re-planning from the current observation, a
+bounded number of times, each recorded; with no re-planner or its budget spent the trial ends as a failure."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+from kintsugi.core.log import TrialLog
+from kintsugi.methods.agentchord.conducting import ConductorConfig, Metrics
+from kintsugi.methods.agentchord.conductor import MERGE_FAILS, REPLANNED, Conductor
+from kintsugi.methods.agentchord.symbolic import PlanningError
+from tests.taskgraph.test_taskgraph_forward import chain
+
+
+def _conductor(replan=None, max_replans: int = 2) -> Conductor:  # noqa: ANN001
+    c = Conductor.__new__(Conductor)  # only the fallback's state: no robot, nothing moves
+    c.graph, c.replan, c.log = chain([1.0, 1.0]), replan, TrialLog()
+    c.metrics, c.config = Metrics(), ConductorConfig(max_replans=max_replans)
+    c.robot, c.synthesis, c.pours = SimpleNamespace(sim_time=1.5), SimpleNamespace(graph=c.graph), {}
+    return c
+
+
+def test_no_replanner_gives_up_with_the_reason() -> None:
+    c = _conductor()
+    assert c.fall_back(c.graph.edge("e0"), None) is False
+    assert [e.kind for e in c.log.events] == ["gave up"] and f"{MERGE_FAILS} times" in c.log.events[0].detail
+
+
+def test_replans_adopt_the_new_graph_until_the_budget_is_spent() -> None:
+    new = chain([2.0, 2.0, 2.0])
+    c = _conductor(lambda: new, max_replans=2)
+    assert c.fall_back(c.graph.edge("e0"), None) is REPLANNED
+    assert c.graph is new and c.synthesis.graph is new and c.ctg[new.start] == 6.0
+    assert c.fall_back(c.graph.edge("e1"), None) is REPLANNED
+    assert c.fall_back(c.graph.edge("e1"), None) is False  # the third: budget spent
+    assert [e.kind for e in c.log.events] == ["replan", "replan", "gave up"] and c.metrics.replans == 2
+
+
+def test_a_refused_replan_is_a_recorded_failure() -> None:
+    def refuse():  # noqa: ANN202
+        raise PlanningError("no plan reaches the goal from here")
+
+    c = _conductor(refuse)
+    assert c.fall_back(c.graph.edge("e0"), None) is False
+    assert [e.kind for e in c.log.events] == ["replan", "replan refused"]
