@@ -53,7 +53,7 @@ def render() -> str:
              "`--config` file (the layout `kintsugi config <task>` prints). Method settings are `method.<key>`",
              "(every method of the run) or `methods.<name>.<key>` (one method); reasoner settings `reasoner.<key>`.",
              "An unknown key or a bad value is a one-line error naming the key.", "", "## Tasks", ""]
-    shown: dict[tuple, str] = {}
+    first_of: dict[type, tuple[str, list]] = {}
     for entry in sorted(TASKS, key=lambda e: e.name):
         task = entry.factory()
         cfg = task.config({})
@@ -61,20 +61,19 @@ def render() -> str:
         lines += [f"### `{entry.name}`", "", entry.description, "",
                   f"Conditions: {', '.join(f'`{c}`' for c in task.conditions)}. "
                   f"Methods: {', '.join(f'`{m.name}`' for m in METHODS if task.method_tag in m.tags)}.", ""]
-        first = next((name for table, name in shown.items() if table == tuple(rows)), None)
-        if first is None:
-            # tasks of one world share most settings: list only those that differ from the first such task
-            base = next((name for table, name in shown.items() if {r[0] for r in table} == {r[0] for r in rows}),
-                        None)
-            if base is not None:
-                other = dict((r[0], r) for r in next(t for t, n in shown.items() if n == base))
-                diff = [r for r in rows if other[r[0]] != r]
-                lines += [f"The settings of `{base}`, except:", ""] + _table(diff) + [""]
-            else:
-                lines += _table(rows) + [""]
-            shown[tuple(rows)] = entry.name
-        else:
-            lines += [f"The same settings as `{first}`.", ""]
+        if type(cfg) not in first_of:
+            first_of[type(cfg)] = (entry.name, rows)
+            lines += _table(rows) + [""]
+            continue
+        base, base_rows = first_of[type(cfg)]  # tasks of one world share most settings: show what differs
+        same = set(base_rows)
+        diff = [r for r in rows if r not in same]
+        gone = sorted({r[0] for r in base_rows} - {r[0] for r in rows})
+        lines += [f"The settings of `{base}`" + (", except:" if diff or gone else "."), ""]
+        if diff:
+            lines += _table(diff) + [""]
+        if gone:
+            lines += ["Without " + ", ".join(f"`{k}`" for k in gone) + ".", ""]
     lines += ["## Methods", ""]
     for entry in sorted(METHODS, key=lambda e: e.name):
         lines += [f"### `{entry.name}`", "", entry.description, ""]
