@@ -87,7 +87,8 @@ class LeRobotV3Writer:
             "segment.action_index": self.actions.ids(ep.action),
             "segment.action_number": ep.action_number,
         }
-        arrays = {k: pa.FixedSizeListArray.from_arrays(pa.array(v.reshape(-1)), v.shape[1]) for k, v in cols.items()}
+        arrays = {k: pa.FixedSizeListArray.from_arrays(pa.array(v.reshape(-1)), v.shape[1]) if v.shape[1] > 1
+                  else pa.array(v.reshape(-1)) for k, v in cols.items()}  # shape [1]: a scalar column, as LeRobot reads it
         arrays |= {k: pa.array(v) for k, v in scalars.items()}
         self._tables.append(pa.table(arrays))
         stats = {k: _stats(v) for k, v in (cols | scalars).items()}

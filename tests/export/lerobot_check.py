@@ -11,7 +11,7 @@ import sys
 def main(root: str) -> None:
     from lerobot.datasets.lerobot_dataset import CODEBASE_VERSION, LeRobotDataset
 
-    ds = LeRobotDataset("kintsugi/export", root=root, video_backend="pyav")
+    ds = LeRobotDataset("kintsugi/export", root=root, video_backend="torchcodec")
     first, last = ds[0], ds[len(ds) - 1]
     shapes = {k: list(v.shape) for k, v in first.items() if hasattr(v, "shape")}
     print(json.dumps({"codebase_version": CODEBASE_VERSION, "frames": ds.num_frames, "episodes": ds.num_episodes,
