@@ -14,7 +14,8 @@ from __future__ import annotations
 from typing import Any
 
 from kintsugi.methods.agentchord import merging
-from kintsugi.methods.agentchord.composer import arms_named, edge_actions, instructed_ops, node_constraints, place_table
+from kintsugi.methods.agentchord.composer import (edge_actions, instructed_ops, node_constraints, place_table,
+                                                  read_instruction)
 from kintsugi.methods.agentchord.failures import (  # noqa: F401 - re-exported: the knowledge base
     FAILURES,
     FailureMode,
@@ -173,11 +174,12 @@ def embedded_arrange(request: ArrangerRequest) -> ArrangerReply:
         raise PlanningError(f"the embedded arranger needs each node's facts (the composer's node_facts); "
                             f"none for {missing[0]!r}")
     seen = {o.name: o for o in request.objects}
-    arms = arms_named(request.task, [a.name for a in request.arms])
+    reading = read_instruction(request)
+    arms = reading.arms
     names = [o.name for o in request.objects if o.visible]
     places = _places(request, [a.name for a in request.arms], [o.name for o in request.objects])
     where = place_table(places, request.domain, seen, dict(request.regions))
-    ops = OpTable(instructed_ops(request.task, request.domain, arms, names, places))  # masks built once, not per search
+    ops = OpTable(instructed_ops(request.task, request.domain, arms, names, places, reading=reading))  # masks once
     wanted = set(request.failure_modes)
     facts = {n.id: _facts(request.node_facts[n.id], request) for n in graph.nodes}
     ctg = cost_to_go(graph)

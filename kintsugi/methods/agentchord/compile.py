@@ -1,6 +1,7 @@
 """Compiling a tabletop task into a recovery-augmented task graph before execution (AgentChord's planning
-calls): composer -> nominal graph, arranger -> monitors and recovery branches, Eq. 8 filter. Only the
-first observation, the task's declared instruction and goal, and the action library go in."""
+calls): composer -> goal and nominal graph, arranger -> monitors and recovery branches, Eq. 8 filter. Only
+the first observation, the task's instruction (the composer reads the goal from it; the task's own goal
+predicates are the scorer's ground truth and never go in) and the action library go in."""
 
 from __future__ import annotations
 
@@ -52,7 +53,8 @@ def task_regions(spec: Any, cfg: Any) -> dict[str, tuple[float, float]]:
 
 def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = True,
                   goal: list[str] | None = None, cfg: Any = None, first: Any = None) -> Compiled:
-    """spec: the task's TaskSpec (instruction, goal, objects); observation: the robot's first Observation, or
+    """spec: the task's TaskSpec (its instruction and object names are read; its goal is not); `goal`: when
+    re-planning, the part of the composed goal still to reach; observation: the robot's first Observation, or
     the current one when re-planning mid-task, with `first` the task's first Observation (what the composer
     remembers of the scene: its static facts, and its images for a model).
     Raises ReasoningError (recorded in the transcript when the reasoner records) when a role fails.
@@ -62,7 +64,7 @@ def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = T
     objects, arms = seen_objects(observation.objects), seen_arms(observation.arms)
     t0 = time.perf_counter()
     try:
-        request = ComposerRequest(task=spec.instruction, goal=list(spec.goal if goal is None else goal),
+        request = ComposerRequest(task=spec.instruction, goal=list(goal or []),
                                   objects=objects, arms=arms, regions=task_regions(spec, cfg),
                                   domain=TABLETOP_DOMAIN, images_png=dict(observation.images_png),
                                   first_objects=seen_objects(first.objects) if first is not None else [],
@@ -77,7 +79,7 @@ def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = T
                         {"composer": t1 - t0, "arranger": 0.0})
     arrange = ArrangerRequest(task=spec.instruction, graph=composed.graph, node_facts=composed.node_facts,
                               edge_operators=composed.edge_operators, objects=objects, arms=arms,
-                              regions=task_regions(spec, cfg), goal=request.goal,
+                              regions=task_regions(spec, cfg), goal=list(composed.goal),
                               domain=TABLETOP_DOMAIN, images_png=dict(observation.images_png))
     result, arranged = ask_arrange(reasoner, arrange, nominal, vocab)
     t2 = time.perf_counter()

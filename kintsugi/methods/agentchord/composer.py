@@ -1,7 +1,8 @@
 """The composer role (AgentChord Eq. 2): instruction + first observation -> nominal task graph.
 
-`embedded_compose` plans, it does not follow a per-task script: it reads the observed state as facts
-(what perception and the arms' sensors report), parses the task's goal predicates, grounds the domain's
+`embedded_compose` plans, it does not follow a per-task script: it reads the goal from the instruction in
+the controlled language (`reading.py`, docs/agentchord-language.md; outside it, it refuses with what it did
+not understand), the observed state as facts (what perception and the arms' sensors report), grounds the domain's
 operators over the scene and searches for the cheapest plan (`symbolic.plan`). Each step becomes an edge
 (its atomic actions, cost in control steps) into a sub-goal node whose constraints check the facts the step
 made true. `ask_compose` runs the role on any backend and checks the reply into a `TaskGraph`.
@@ -18,7 +19,9 @@ from kintsugi.methods.agentchord.facts import (  # noqa: F401 - re-exported: the
     remembered_facts,
     goal_places,
 )
-from kintsugi.methods.agentchord.instruction import arm_bindings, arms_named, held_up, instructed_ops  # noqa: F401
+from kintsugi.methods.agentchord.instruction import (  # noqa: F401 - re-exported
+    arm_bindings, arms_named, held_up, instructed_ops, reading_of, scene_of)
+from kintsugi.methods.agentchord.language import NotUnderstood
 from kintsugi.methods.agentchord.symbolic import Atom, GroundOp, PlanningError, State, atom_text, parse_literals, plan
 from kintsugi.methods.agentchord.templates import edge_actions, fill, node_constraints  # noqa: F401
 from kintsugi.methods.agentchord.types import ComposerReply, ComposerRequest, Domain, SeenObject
@@ -71,19 +74,57 @@ def _short(exc: Exception, limit: int = 800) -> str:
     return text if len(text) <= limit else text[: limit - 3] + "..."
 
 
+def read_instruction(request: Any):  # noqa: ANN201 - a Reading
+    """The request's instruction in the controlled language, over the scene as perceived (the composer's and
+    the arranger's request alike); NotUnderstood outside the language."""
+    scene = scene_of(request.objects, [a.name for a in request.arms], request.regions, request.domain,
+                     getattr(request, "first_objects", ()))
+    words = {p.name for p in request.domain.predicates} | set(getattr(request.domain, "aliases", {}))
+    return reading_of(request.task, scene, frozenset(words))
+
+
 def embedded_compose(request: ComposerRequest) -> ComposerReply:
-    """Plan the nominal graph from the goal predicates and the observed facts (no task script)."""
+    """Read the goal from the instruction (or take the one still to reach, when re-planning), then plan the
+    nominal graph from it and the observed facts (no task script)."""
     domain = request.domain
     seen = {o.name: o for o in request.objects}
-    arms = arms_named(request.task, [a.name for a in request.arms])
+    reading = read_instruction(request)
+    goal_text = list(request.goal) or reading.goal
     names = [o.name for o in request.objects if o.visible]
-    places = goal_places(list(request.goal), [a.name for a in request.arms], [o.name for o in request.objects])
+    places = goal_places(goal_text, [a.name for a in request.arms], [o.name for o in request.objects])
     where = place_table(places, domain, seen, dict(request.regions))
     initial = observed_facts(request, domain, places) | remembered_facts(request, domain)
-    goal = parse_literals(list(request.goal), domain, where="task goal")
-    ops = instructed_ops(request.task, domain, arms, names, places)
+    goal = parse_literals(goal_text, domain, where="goal")
+    ops = instructed_ops(request.task, domain, reading.arms, names, places, reading=reading)
     steps = plan(initial, goal, ops)
-    return build_graph(request.task, domain, initial, steps, seen, goal[0], where)
+    reply = build_graph(request.task, domain, initial, steps, seen, goal[0], where)
+    return reply.model_copy(update={"goal": goal_text})
+
+
+def check_goal(reply: ComposerReply, request: ComposerRequest) -> None:
+    """The reply's goal is literals over the domain's predicates naming the scene's objects, arms, regions and
+    the domain's places; BadReply names the first that is not."""
+    if not reply.goal:
+        raise BadReply("the reply has no `goal`: write the instruction's goal as literals over the domain's "
+                       "predicates, e.g. [\"inside(ball, bowl)\", \"released(ball)\"]")
+    try:
+        parse_literals(list(reply.goal), request.domain, where="goal")
+    except PlanningError as exc:
+        raise BadReply(_short(exc)) from None
+    from kintsugi.methods.agentchord.types import parse_atom
+
+    known = ({o.name for o in request.objects} | {a.name for a in request.arms} | set(request.regions)
+             | set(request.domain.directions))
+    for text in reply.goal:
+        for arg in parse_atom(text)[2]:
+            fn = arg.split("(")[0]
+            inner = arg[len(fn) + 1:-1] if "(" in arg else None
+            if inner is not None and (fn not in request.domain.relative_places or inner not in known):
+                raise BadReply(f"goal literal {text!r}: {arg!r} is not a place of the domain "
+                               f"({', '.join(f'{p}(object)' for p in request.domain.relative_places)})")
+            if inner is None and arg not in known:
+                raise BadReply(f"goal literal {text!r} names {arg!r}, which is no object, arm, region or direction "
+                               "of the request")
 
 
 def check_composition(reply: ComposerReply, vocabulary: Vocabulary) -> TaskGraph:
@@ -108,16 +149,20 @@ COMPOSER = ROLES.register(Role(name="composer", request=ComposerRequest, reply=C
 
 
 def ask_compose(reasoner: Any, request: ComposerRequest, vocabulary: Vocabulary) -> tuple[TaskGraph, ComposerReply]:
-    """The composer role on any backend (recorded when the reasoner records) -> a checked nominal graph."""
+    """The composer role on any backend (recorded when the reasoner records) -> a checked nominal graph and the
+    goal it read from the instruction (the goal given, when re-planning)."""
     out: dict[str, TaskGraph] = {}
 
     def check(reply: ComposerReply) -> ComposerReply:
+        if request.goal:
+            reply = reply.model_copy(update={"goal": list(request.goal)})
         out["graph"] = check_composition(reply, vocabulary)
+        check_goal(reply, request)
         return reply
 
     reply = ask(reasoner, "composer", request, check)
     return out["graph"], reply
 
 
-__all__ = ["COMPOSER", "GoalHolds", "ask_compose", "check_composition", "embedded_compose", "observed_facts",
-           "PlanningError"]
+__all__ = ["COMPOSER", "GoalHolds", "NotUnderstood", "ask_compose", "check_composition", "check_goal",
+           "embedded_compose", "observed_facts", "read_instruction", "PlanningError"]

@@ -3,39 +3,51 @@ grounded operators a plan may use."""
 
 from __future__ import annotations
 
-import re
+from functools import lru_cache
 from typing import Any
 
+from kintsugi.methods.agentchord.language import Scene
+from kintsugi.methods.agentchord.reading import Reading, read
 from kintsugi.methods.agentchord.symbolic import ground
 
-def arms_named(task: str, arms: list[str]) -> list[str]:
-    """The arms an instruction asks for ("using the right arm"); all arms when it names none or both."""
-    text = task.lower()
-    named = [a for a in arms if re.search(rf"\b{a}\s+(arm|hand)\b", text)]
-    return named or list(arms)
+
+def scene_of(objects: Any, arms: list[str], regions: Any = (), domain: Any = None, first: Any = ()) -> Scene:
+    """The scene as the language names it: objects by name words, and by kind and colour where perception
+    reports them; `stands` from perception's uprightness (in the first observation when re-planning)."""
+    seen = {getattr(o, "name", o): o for o in objects}
+    standing = {getattr(o, "name", ""): o for o in first} or seen
+    stands = {n: bool(getattr(o, "upright", None)) for n, o in standing.items() if not isinstance(o, str)}
+    return Scene.of(list(seen), arms=arms, regions=tuple(regions),
+                    directions=tuple(domain.directions) if domain is not None else None,
+                    kinds={n: getattr(o, "kind", None) or "" for n, o in seen.items() if not isinstance(o, str)},
+                    colours={n: getattr(o, "colour", None) for n, o in seen.items() if not isinstance(o, str)},
+                    stands=stands)
 
 
-def arm_bindings(task: str, arms: list[str], objects: list[str]) -> dict[str, str]:
-    """Objects the instruction gives to one arm ("the cup with the left arm", "the bottle with the right
-    hand") -> that arm. "using the right arm" after a phrase names the arm for the whole task (`arms_named`),
-    not for the object before it."""
-    text = task.lower()
-    out = {}
-    for o in objects:
-        for a in arms:
-            if (re.search(rf"\b{re.escape(o.lower())}\s+with\s+(the\s+)?{a}\s+(arm|hand)\b", text)
-                    or re.search(rf"\b{a}\s+(arm|hand)\s+for\s+(the\s+)?{re.escape(o.lower())}\b", text)):
-                out[o] = a
-    return out
+@lru_cache(maxsize=256)
+def reading_of(task: str, scene: Scene, predicates: frozenset[str] | None = None) -> Reading:
+    """The instruction read in the controlled language (NotUnderstood when it is outside it)."""
+    return read(task, scene, predicates)
 
 
-def held_up(task: str, objects: list[str]) -> list[str]:
-    """Objects the instruction asks to be held up while others act on them ("hold the cup up")."""
-    text = task.lower()
-    return [o for o in objects if re.search(rf"\bhold\s+(the\s+)?{re.escape(o.lower())}\s+up\b", text)]
+def arms_named(task: str, arms: list[str], objects: Any = ()) -> list[str]:
+    """The arms an instruction uses ("using the right arm"); all arms when it names none."""
+    return reading_of(task, scene_of(objects, arms)).arms
 
 
-def instructed_ops(task: str, domain: Any, arms: list[str], objects: list[str], places: list[str] = ()) -> list:
+def arm_bindings(task: str, arms: list[str], objects: Any) -> dict[str, str]:
+    """Objects the instruction gives to one arm ("the cup with the left arm", "use the right arm for the
+    spoon", "the blue block with the left hand") -> that arm (the giver, for an object handed over)."""
+    return reading_of(task, scene_of(objects, arms)).bindings
+
+
+def held_up(task: str, objects: Any, arms: list[str] = ("left", "right")) -> list[str]:
+    """Objects the instruction holds up while a later step acts on them ("hold the cup up, pour into it")."""
+    return reading_of(task, scene_of(objects, list(arms))).held_up
+
+
+def instructed_ops(task: str, domain: Any, arms: list[str], objects: list[str], places: list[str] = (),
+                   reading: Reading | None = None) -> list:
     """The grounded operators the instruction allows: an object given to one arm is taken from the table by
     that arm only (no instance that picks it up adds holding(other arm, it); a handover may pass it on), until
     it has handed the object over to the other arm: from then on only the taker picks it up again after a
@@ -43,7 +55,9 @@ def instructed_ops(task: str, domain: Any, arms: list[str], objects: list[str], 
     names it as the target (carry over it, pour into it)."""
     from dataclasses import replace
 
-    bound, up = arm_bindings(task, arms, objects), held_up(task, objects)
+    if reading is None:
+        reading = reading_of(task, scene_of(objects, list(arms)))
+    bound, up = {o: a for o, a in reading.bindings.items() if a in arms}, reading.held_up
     handovers = any(p.name == "handed_over" and len(p.params) == 3 for p in domain.predicates)
     out = []
     for op in ground(domain, arms, objects, places):

@@ -151,7 +151,9 @@ class SeenArm(StrictModel):
 
 class ComposerRequest(StrictModel):
     task: str = Field(description="the instruction")
-    goal: list[Literal_] = Field(min_length=1, max_length=32, description="goal predicates over the scene")
+    goal: list[Literal_] = Field(default_factory=list, max_length=32,
+                                 description="empty: the composer reads the goal from the instruction; re-planning "
+                                             "mid-task: the part of the composed goal still to reach")
     objects: list[SeenObject] = Field(min_length=1, max_length=32)
     arms: list[SeenArm] = Field(min_length=1, max_length=2)
     domain: Domain
@@ -174,12 +176,20 @@ class ComposerRequest(StrictModel):
 
 
 class ComposerReply(StrictModel):
+    goal: list[Literal_] = Field(default_factory=list, max_length=32,
+                                 description="the formal goal the composer read from the instruction (literals over "
+                                             "the domain's predicates); the graph's goal node checks it")
     graph: dict[str, JsonValue] = Field(description="the nominal task graph (kintsugi.taskgraph JSON)")
     node_facts: dict[str, list[str]] = Field(default_factory=dict,
                                              description="node id -> the facts that hold there (optional)")
     edge_operators: dict[str, str] = Field(default_factory=dict,
                                            description="edge id -> the ground operator it carries out (optional)")
     reasoning: str = Field(default="", max_length=4000)
+
+    @field_validator("goal")
+    @classmethod
+    def _literals(cls, v: list[str]) -> list[str]:
+        return _atoms(v)
 
 
 class ArrangerRequest(StrictModel):

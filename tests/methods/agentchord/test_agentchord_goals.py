@@ -30,6 +30,10 @@ def _box(name: str, xy: tuple[float, float], size: tuple[float, float, float], u
                       upright=upright, extent=size)
 
 
+COFFEE = ("Put the capsule upright into the tray with the left arm, then take the tray by its side rims with both "
+          "arms and set it down in the region in front.")
+
+
 def _compose(task: str, goal: list[str], objects: list[SeenObject], regions: dict | None = None):
     return embedded_compose(ComposerRequest(task=task, goal=goal, objects=objects, arms=ARMS,
                                             domain=TABLETOP_DOMAIN, regions=regions or {}))
@@ -70,7 +74,7 @@ def test_handover_goal_plans_take_then_let_go_and_place_in_the_named_region() ->
     block = _box("block", (0.4, 0.2), (0.05, 0.05, 0.05), upright=True)
     goal = ["handed_over(block, left, right)", "not dropped(block)", "in_region(block, target)", "flat(block)",
             "released(block)"]
-    said = "Pick up the block with the left arm, hand it over to the right arm, and place it."
+    said = "Pick up the block with the left arm, hand it over to the right arm, and place it in the target region."
     reply = _compose(said, goal, [block], {"target": (0.40, -0.25)})
     assert _ops(reply) == ["grasp(left, block)", "lift(left, block)", "take_over(right, left, block)",
                            "let_go(left, right, block)", "carry_to(right, block, target)", "place_at(right, block, target)"]
@@ -95,8 +99,8 @@ def test_handover_goal_plans_take_then_let_go_and_place_in_the_named_region() ->
 
 def test_unknown_region_is_a_planning_error_naming_it() -> None:
     block = _box("block", (0.4, 0.2), (0.05, 0.05, 0.05), upright=True)
-    with pytest.raises(PlanningError, match="'target'"):
-        _compose("place the block", ["in_region(block, target)"], [block])
+    with pytest.raises(PlanningError, match="target region.*names no region"):
+        _compose("Place the block in the target region.", ["in_region(block, target)"], [block])
 
 
 def test_coffee_goal_puts_the_capsule_in_first_and_carries_the_wide_tray_with_both_arms() -> None:
@@ -104,8 +108,7 @@ def test_coffee_goal_puts_the_capsule_in_first_and_carries_the_wide_tray_with_bo
     tray = _box("tray", (0.40, 0.0), (0.22, 0.16, 0.04), upright=None)
     goal = ["inside(capsule, tray)", "upright(capsule)", "in_region(tray, tray_forward)", "flat(tray)",
             "released(capsule)", "released(tray)"]
-    reply = _compose("Put the capsule into the tray with the left arm, then carry the tray with both arms.", goal,
-                     [capsule, tray], {"tray_forward": (0.56, 0.0)})
+    reply = _compose(COFFEE, goal, [capsule, tray], {"tray_forward": (0.56, 0.0)})
     assert _ops(reply) == ["grasp(left, capsule)", "lift(left, capsule)", "put_inside(left, capsule, tray)",
                            "take_both(tray)", "carry_both(tray, tray_forward)", "let_go_both(tray)"]
     edges = reply.graph["edges"]
@@ -123,9 +126,8 @@ def test_two_arm_carry_is_watched_for_a_drop_and_recovers_by_taking_it_again_wit
     goal = ["inside(capsule, tray)", "upright(capsule)", "in_region(tray, tray_forward)", "flat(tray)",
             "released(capsule)", "released(tray)"]
     regions = {"tray_forward": (0.56, 0.0)}
-    reply = _compose("Put the capsule into the tray with the left arm, then carry the tray with both arms.", goal,
-                     [capsule, tray], regions)
-    req = ArrangerRequest(task="coffee", graph=reply.graph, node_facts=reply.node_facts,
+    reply = _compose(COFFEE, goal, [capsule, tray], regions)
+    req = ArrangerRequest(task=COFFEE, graph=reply.graph, node_facts=reply.node_facts,
                           edge_operators=reply.edge_operators, objects=[capsule, tray], arms=ARMS,
                           domain=TABLETOP_DOMAIN, regions=regions)
     props = embedded_arrange(req).proposals
@@ -166,7 +168,7 @@ def test_a_fall_into_place_is_a_branch_only_when_the_goal_allows_a_drop(forbid: 
     goal = ["in_region(block, target)", "flat(block)", "released(block)"] + (["not dropped(block)"] if forbid else [])
     regions = {"target": (0.40, -0.25)}
     reply = _compose("Place the block in the target region.", goal, [block], regions)
-    req = ArrangerRequest(task="place", graph=reply.graph, node_facts=reply.node_facts, goal=goal,
+    req = ArrangerRequest(task="Place the block in the target region.", graph=reply.graph, node_facts=reply.node_facts, goal=goal,
                           edge_operators=reply.edge_operators, objects=[block], arms=ARMS, domain=TABLETOP_DOMAIN,
                           regions=regions)
     drops = [p for p in embedded_arrange(req).proposals if p["monitor"]["failure_mode"] == "drop"]

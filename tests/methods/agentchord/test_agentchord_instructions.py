@@ -1,5 +1,5 @@
 """The embedded composer reads who-holds-what from the instruction: "the cup with the left arm" binds the
-cup to that arm, "hold the cup up" makes the cup lifted before anything is carried over or poured into it
+cup to that arm (and "pour from the bottle ... using the right arm" the bottle), "hold the cup up" makes the cup lifted before anything is carried over or poured into it
 (pour-dual), and an instruction that says neither plans as before."""
 
 from __future__ import annotations
@@ -16,7 +16,9 @@ def test_bindings_and_held_up_are_read_from_the_text() -> None:
     assert arm_bindings(DUAL, ["left", "right"], ["bottle", "cup"]) == {"cup": "left", "bottle": "right"}
     assert held_up(DUAL, ["bottle", "cup"]) == ["cup"]
     plain = "Pour water from the bottle into the cup using the right arm."
-    assert arm_bindings(plain, ["left", "right"], ["bottle", "cup"]) == {} and held_up(plain, ["bottle", "cup"]) == []
+    assert arm_bindings(plain, ["left", "right"], ["bottle", "cup"]) == {"bottle": "right"}
+    assert held_up(plain, ["bottle", "cup"]) == []
+    assert arm_bindings("Pour water from the bottle into the cup.", ["left", "right"], ["bottle", "cup"]) == {}
 
 
 def test_dual_pour_lifts_the_cup_with_the_left_arm_before_the_right_pours() -> None:
