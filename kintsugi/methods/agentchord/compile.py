@@ -17,7 +17,8 @@ from kintsugi.methods.agentchord.vocab import tabletop_vocabulary
 from kintsugi.methods.agentchord.arranger import ask_arrange
 from kintsugi.methods.agentchord.composer import ask_compose
 from kintsugi.methods.agentchord.symbolic import PlanningError
-from kintsugi.methods.agentchord.types import ArrangerReply, ArrangerRequest, ComposerReply, ComposerRequest
+from kintsugi.methods.agentchord.types import (ArrangerReply, ArrangerRequest, ComposerReply, ComposerRequest,
+                                               SeenObject)
 from kintsugi.taskgraph.augment import RecoveryProposal, augment
 from kintsugi.taskgraph.forward import FilterResult, forward_filter
 from kintsugi.reasoning.jsontext import describe_validation_error
@@ -51,6 +52,17 @@ def task_regions(spec: Any, cfg: Any) -> dict[str, tuple[float, float]]:
     return fixed
 
 
+def labelled(objects: list[SeenObject], spec: Any, cfg: Any) -> list[SeenObject]:
+    """The perceived objects with the labels the task gives them (kind, colour: what a detector or a model
+    looking at the images would name), so the instruction may name them so ("the brown box")."""
+    out = []
+    for o in objects:
+        decl = getattr(spec, "declared", {}).get(o.name) or getattr(getattr(cfg, "objects", None), o.name, None)
+        kind, colour = getattr(decl, "kind", None), getattr(decl, "colour", None)
+        out.append(o.model_copy(update={"kind": kind, "colour": colour}) if kind or colour else o)
+    return out
+
+
 def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = True,
                   goal: list[str] | None = None, cfg: Any = None, first: Any = None) -> Compiled:
     """spec: the task's TaskSpec (its instruction and object names are read; its goal is not); `goal`: when
@@ -61,7 +73,7 @@ def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = T
     With `arranger=False` (ReKep-style) there is one planning call: the monitors are the nominal graph's own
     constraints that must persist along each edge (detect-only), no recovery branches."""
     vocab = tabletop_vocabulary(spec.objects)
-    objects, arms = seen_objects(observation.objects), seen_arms(observation.arms)
+    objects, arms = labelled(seen_objects(observation.objects), spec, cfg), seen_arms(observation.arms)
     t0 = time.perf_counter()
     try:
         request = ComposerRequest(task=spec.instruction, goal=list(goal or []),

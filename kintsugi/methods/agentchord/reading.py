@@ -4,7 +4,8 @@ arm takes which object, and which objects are held up while others act on them.
 Steps run in the order written; the goal is where things end: each object's last placement (one per object),
 its orientation, whether it is released, and the history facts (poured, handed over, not dropped, not moved).
 A placement on the table or in a region of it that states no orientation leaves the object the way it rests:
-upright if it was seen standing, flat otherwise. Pouring into a container keeps the container upright.
+upright if it was seen standing, flat otherwise; an object something is put on or into keeps resting so, and
+one poured into stays upright.
 Contradictions (placed twice, moved and not moved, upright and flat) are refused, never resolved silently.
 """
 
@@ -57,6 +58,8 @@ class _Meaning:
         self.up: list[str] = []
         self.keep_upright: list[str] = []
         self.not_moved: list[str] = []
+        self.supports: list[str] = []
+        """Objects something is put on or into: they keep resting the way they rest (a tipped bin spills)."""
 
     def of(self, name: str) -> _Object:
         return self.objects.setdefault(name, _Object())
@@ -136,6 +139,8 @@ class _Meaning:
                 self.bind(o, g.arms, c)
             if len(place) > 1 and place[0] != "region":
                 self.target(place[1])
+            if place[0] in ("on", "into"):
+                self.supports.append(place[1])
 
     def do_pour(self, g: Group, c: Clause) -> None:
         src = g.source or (g.objects[0] if g.objects else None)
@@ -213,12 +218,13 @@ class _Meaning:
                     goal.append(f"{PLACES[kind]}({o}, {arg[0]})")
                 resting = st.orient
                 if resting is None and kind in ("table", "region", "beside", "left_of", "right_of"):
-                    stands = next((th.stands for th in self.scene.things if th.name == o), None)
-                    resting = None if stands is None else ("upright" if stands else "flat")
+                    resting = self.resting(o)
                 if resting is not None:
                     goal.append(f"{resting}({o})")
-            elif st.orient is not None:
-                goal.append(f"{st.orient}({o})")
+            elif st.orient is not None or o in self.supports:
+                how = st.orient or self.resting(o)
+                if how is not None:
+                    goal.append(f"{how}({o})")
             if st.heading is not None:
                 goal.append(f"heading({o}, {st.heading})")
             if st.held and st.place is None and not st.released:
@@ -232,6 +238,10 @@ class _Meaning:
         arms = [a for a in self.scene.arms if a in self.arms] or list(self.scene.arms)
         return Reading(goal=list(dict.fromkeys(goal)), arms=arms, bindings=dict(self.bindings),
                        both_arms=list(self.both), held_up=list(self.up))
+
+    def resting(self, o: str) -> str | None:
+        stands = next((th.stands for th in self.scene.things if th.name == o), None)
+        return None if stands is None else ("upright" if stands else "flat")
 
     def held_up(self, o: str) -> list[str]:
         if self.predicates is None or "held_up" in self.predicates:

@@ -137,6 +137,10 @@ class SeenObject(StrictModel):
     """Named extremal points (top, bottom, axis ends, a container's opening)."""
     axis: Vec3 | None = None
     n_points: int = 0
+    kind: str | None = None
+    """What the task calls this kind of object (a detector's label: `can`, `block`), when it says; not measured."""
+    colour: str | None = None
+    """The colour the task gives the object (what the cameras show: `red`), when it says; not measured."""
 
 
 class SeenArm(StrictModel):
