@@ -1,7 +1,7 @@
 # Two commands for a fresh machine (Python 3.11 + the package registries):
 #   make demo   set up, then run a small offline campaign of each system (A peg insertion, B AgentChord,
 #               C CoRAL) and print their tables
-#   make test   set up, then run the test suite
+#   make test   set up, build the real model servers once per machine (mk/servers.mk), then run the test suite
 PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
@@ -22,7 +22,9 @@ demo: setup
 		--set disturbance.drop_p=0.3 --trials 3 --workers 2 --out runs/demo/pour-single
 	$(BIN)/kintsugi bench flip-box --methods coral,l2r --trials 2 --workers 2 --out runs/demo/flip-box
 
-test: setup
+include mk/servers.mk
+
+test: setup servers
 	$(BIN)/pytest -n 2
 
 .PHONY: setup demo test

@@ -8,6 +8,12 @@ Like several local servers, it can refuse the strict structured-output options:
 `refuse={"json_schema", "tool_choice"}` answers HTTP `refuse_status` (400) to a
 request with `response_format` json_schema or `tool_choice="required"`, without
 consuming a script (the refused request is still in `server.requests`).
+
+Like a real server, it answers the backend's capability preflight on its own: a request with a small
+`max_tokens` (<= 64; the backend sends none unless `reasoner.options.max_reply_tokens` is set) gets a
+short reply (JSON, or a tool call when tools are required), usage counted from the request's size
+(85 tokens per image), and lands in `server.probes`, not in `server.requests`; strict options it refuses
+are refused there too. `images=False` makes it refuse image inputs as llama.cpp's server does (HTTP 500).
 """
 
 from __future__ import annotations
@@ -37,6 +43,8 @@ class Script:
     hang_s: float = 0.0
     usage: tuple[int, int] = (100, 20)
     refusal: str | None = None
+    message: str | None = None
+    error_fields: dict[str, Any] = field(default_factory=dict)
 
 
 def content(reply: Any, usage: tuple[int, int] = (100, 20)) -> Script:
@@ -56,9 +64,11 @@ def refusal(text: str) -> Script:
     return Script("content", content=None, refusal=text)
 
 
-def http_error(status: int, retry_after_s: float | None = 0.01) -> Script:
-    """An HTTP error; a small retry-after keeps the SDK's backoff short in tests."""
-    return Script("error", status=status, retry_after_s=retry_after_s)
+def http_error(status: int, retry_after_s: float | None = 0.01, message: str | None = None,
+               **error_fields: Any) -> Script:
+    """An HTTP error; a small retry-after keeps the client's backoff short in tests. `message` and
+    `error_fields` (e.g. llama.cpp's n_ctx, n_prompt_tokens) go into the error object."""
+    return Script("error", status=status, retry_after_s=retry_after_s, message=message, error_fields=error_fields)
 
 
 def hang(seconds: float) -> Script:
@@ -69,12 +79,14 @@ def hang(seconds: float) -> Script:
 class FakeOpenAIServer:
     """Threaded stdlib HTTP server on 127.0.0.1 with a random free port."""
 
-    def __init__(self, refuse: Iterable[str] = (), refuse_status: int = 400) -> None:
+    def __init__(self, refuse: Iterable[str] = (), refuse_status: int = 400, images: bool = True) -> None:
         self.refuse = set(refuse)
         unknown = self.refuse - REFUSALS.keys()
         if unknown:
             raise ValueError(f"cannot refuse {sorted(unknown)}; known: {sorted(REFUSALS)}")
         self.refuse_status = refuse_status
+        self.images = images
+        self.probes: list[dict[str, Any]] = []
         self.refused = 0
         self.scripts: deque[Script] = deque()
         self.requests: list[dict[str, Any]] = []
@@ -120,6 +132,26 @@ class FakeOpenAIServer:
                     return REFUSALS[option][1]
             return self.scripts.popleft() if self.scripts else None
 
+    def _probe(self, body: dict[str, Any]) -> tuple[int, dict[str, Any]]:
+        """A preflight request's answer: (status, payload)."""
+        with self._lock:
+            self.probes.append(body)
+        messages = body.get("messages", [])
+        images = sum(1 for m in messages if isinstance(m.get("content"), list)
+                     for p in m["content"] if p.get("type") == "image_url")
+        if images and not self.images:
+            return 500, {"error": {"code": 500, "message": "image input is not supported - hint: if this is "
+                                   "unexpected, you may need to provide the mmproj", "type": "server_error"}}
+        for option in sorted(self.refuse):
+            if REFUSALS[option][0](body):
+                return self.refuse_status, {"error": {"message": REFUSALS[option][1], "type": "invalid_request_error"}}
+        text = json.dumps([m.get("content") for m in messages if isinstance(m.get("content"), str)])
+        text += json.dumps([p.get("text", "") for m in messages if isinstance(m.get("content"), list)
+                            for p in m["content"]])
+        script = tool_calls(("probe", {"ok": True})) if body.get("tool_choice") == "required" else content({"ok": True})
+        script.usage = (len(text) // 4 + 85 * images, 1)
+        return 200, _completion(body, script)
+
     def _handler_class(self) -> type[BaseHTTPRequestHandler]:
         server = self
 
@@ -159,6 +191,10 @@ class FakeOpenAIServer:
                 except json.JSONDecodeError:
                     self._send(400, {"error": {"message": "body is not JSON", "type": "invalid_request_error"}})
                     return
+                if isinstance(body.get("max_tokens"), int) and body["max_tokens"] <= PROBE_MAX_TOKENS:
+                    status, payload = server._probe(body)
+                    self._send(status, payload)
+                    return
                 script = server._next(body, {k.lower(): v for k, v in self.headers.items()})
                 if isinstance(script, str):
                     self._send(server.refuse_status, {"error": {"message": script, "type": "invalid_request_error",
@@ -178,13 +214,17 @@ class FakeOpenAIServer:
                     if script.retry_after_s is not None:
                         extra["retry-after-ms"] = str(int(script.retry_after_s * 1000) or 1)
                         extra["retry-after"] = str(script.retry_after_s)
-                    self._send(script.status, {"error": {"message": f"scripted HTTP {script.status}",
-                                                         "type": "server_error", "code": None}}, extra)
+                    error = {"message": script.message or f"scripted HTTP {script.status}", "type": "server_error",
+                             "code": None, **script.error_fields}
+                    self._send(script.status, {"error": error}, extra)
                     return
                 self._send(200, _completion(body, script))
 
         return Handler
 
+
+PROBE_MAX_TOKENS = 64
+"""Requests with at most this many `max_tokens` are the backend's preflight probes."""
 
 REFUSALS = {
     "json_schema": (

@@ -24,6 +24,7 @@ from kintsugi.campaign.executors import failed_record, make_executor
 from kintsugi.campaign.plan import CampaignConfig, expand, validate
 from kintsugi.campaign.store import ResultStore
 from kintsugi.core.record import TrialRecord, TrialSpec
+from kintsugi.reasoning.preflight import preflight
 
 
 def _progress(console: Console, enabled: bool) -> Progress:
@@ -69,6 +70,8 @@ def run_campaign(
     todo = [s for s in specs if s.key not in records]
 
     console = console or Console(stderr=True, soft_wrap=True)
+    for note in preflight(todo):  # a model endpoint that cannot serve the methods stops the campaign here
+        console.print(escape(f"preflight: {note}"))
     ok = sum(r.success for r in records.values())
     err = sum(r.error is not None for r in records.values())
     if progress and records:

@@ -134,6 +134,7 @@ def bench(
     from kintsugi.campaign.plan import campaign_for, suite_of
     from kintsugi.campaign.render import print_tables
     from kintsugi.campaign.report import write_report
+    from kintsugi.cli.pages import write_trial_pages
     from kintsugi.campaign.runner import error_summary, run_campaign
     from kintsugi.campaign.tables import tables_for
 
@@ -147,7 +148,7 @@ def bench(
                            videos_per_cell=videos_per_cell)
         records = run_campaign(cfg, out, workers=workers, executor=executor, trial_timeout_s=trial_timeout)
         print_tables(tables_for(cfg.task, records, cfg), console)
-        md, html = write_report(out, cfg, records)
+        md, html = write_report(out, cfg, records, trial_pages=write_trial_pages(out, records))
     except KintsugiError as exc:
         _fail(exc)
         return
@@ -161,22 +162,39 @@ def bench(
 
 
 @app.command()
-def report(out: Annotated[Path, typer.Argument(help="campaign directory")], plugin: PluginOpt = None) -> None:
-    """Rebuild the tables and report of a campaign directory from its results."""
+def report(out: Annotated[Path, typer.Argument(
+        help="campaign directory, or a directory of campaign directories (then also an index.html over them)")],
+           plugin: PluginOpt = None) -> None:
+    """Rebuild the tables, report and trial pages of a campaign directory from its results."""
     _plugins(plugin)
+    from kintsugi.campaign.store import MANIFEST
+    from kintsugi.cli.pages import write_index
+
+    campaigns = [out] if (out / MANIFEST).exists() or not out.is_dir() else sorted(
+        p for p in out.iterdir() if (p / MANIFEST).exists())
+    if not campaigns:
+        _fail(f"{out} holds no campaign ({MANIFEST}) and no campaign directories")
+    for campaign in campaigns:
+        _report_one(campaign)
+    if campaigns != [out]:
+        console.print(escape(f"index: {write_index(out, campaigns, title=f'kintsugi: {out.name}')}"))
+
+
+def _report_one(out: Path) -> None:
     from kintsugi.campaign.plan import expand
     from kintsugi.campaign.render import print_tables
     from kintsugi.campaign.report import write_report
     from kintsugi.campaign.runner import error_summary
     from kintsugi.campaign.store import ResultStore
     from kintsugi.campaign.tables import tables_for
+    from kintsugi.cli.pages import write_trial_pages
 
     try:
         store = ResultStore(out)
         cfg = store.load_config()
         wanted = {s.key for s in expand(cfg)}
         records = [r for r in store.read() if r.key in wanted]  # read once, only this campaign's trials
-        md, html = write_report(out, cfg, records)
+        md, html = write_report(out, cfg, records, trial_pages=write_trial_pages(out, records))
         print_tables(tables_for(cfg.task, records, cfg), console)
     except KintsugiError as exc:
         _fail(exc)

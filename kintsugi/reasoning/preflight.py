@@ -100,7 +100,12 @@ def preflight(specs: Iterable[Any]) -> list[str]:
     from kintsugi.reasoning import make_reasoner
 
     groups: dict[str, tuple[Any, dict[str, list[Role]]]] = {}
+    seen: set[str] = set()
     for spec in specs:
+        kind = json.dumps([spec.task, spec.method, spec.overrides, spec.reasoner.model_dump()], default=str)
+        if spec.reasoner.backend == "embedded" and not spec.overrides or kind in seen:
+            continue
+        seen.add(kind)
         _, entry, _, _, settings = resolve(spec)
         if settings.backend == "embedded":
             continue

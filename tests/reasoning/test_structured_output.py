@@ -220,8 +220,11 @@ def test_cli_structured_output_option_reaches_the_backend_and_the_record(tmp_pat
         out = tmp_path / "strict.json"
         result = CliRunner().invoke(app, [*args, "--base-url", server.base_url, "--record", str(out),
                                           "--structured-output", "strict"])
-        assert result.exit_code == 1 and "--structured-output" in out.read_text()
-        assert len(server.requests) == 1
+        # the preflight stops the run before the trial, in one line naming the option and the roles
+        assert result.exit_code == 2 and not out.exists()
+        assert "does not honour strict response_format json_schema" in result.output
+        assert "recovery's analyze, judge need it with --structured-output strict" in result.output
+        assert len(server.requests) == 0 and server.probes
 
     result = CliRunner().invoke(app, [*args, "--structured-output", "json"])
     assert result.exit_code == 2 and "json" in result.output

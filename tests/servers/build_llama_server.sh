@@ -1,10 +1,10 @@
 #!/usr/bin/env bash
 # Build llama.cpp's llama-server from the pinned llama-cpp-python source package, once per machine.
-# Usage: build_llama_server.sh [PIP]   -> prints the path of the binary on its last line.
+# Usage: build_llama_server.sh [PYTHON]   -> prints the path of the binary on its last line (PYTHON has pip).
 # Cache: ${KINTSUGI_CACHE:-~/.cache/kintsugi}/llama-cpp-python-$VERSION/ (sdist, sources, build, bin).
 set -euo pipefail
 VERSION="${LLAMA_CPP_PYTHON_VERSION:-0.3.36}"
-PIP="${1:-pip}"
+PY="${1:-python3}"
 CACHE="${KINTSUGI_CACHE:-$HOME/.cache/kintsugi}/llama-cpp-python-$VERSION"
 BIN="$CACHE/bin/llama-server"
 if [ -x "$BIN" ]; then echo "$BIN"; exit 0; fi
@@ -14,7 +14,7 @@ flock 9
 if [ -x "$BIN" ]; then echo "$BIN"; exit 0; fi
 SDIST="$CACHE/llama_cpp_python-$VERSION.tar.gz"
 if [ ! -f "$SDIST" ]; then
-  "$PIP" download --quiet --no-binary :all: --no-deps --no-build-isolation \
+  "$PY" -m pip download --quiet --disable-pip-version-check --no-binary :all: --no-deps \
     "llama-cpp-python==$VERSION" -d "$CACHE" >&2
 fi
 if [ ! -d "$CACHE/src" ]; then
