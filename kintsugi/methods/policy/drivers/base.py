@@ -13,6 +13,7 @@ LeRobot feature list and a robomimic key set are all built from one description.
 
 from __future__ import annotations
 
+import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -58,13 +59,27 @@ class Driver(ABC):
     def action_high(self) -> np.ndarray: ...
 
     def clip(self, action: Any) -> np.ndarray:
-        a = np.asarray(action, dtype=np.float64).reshape(-1)
-        if a.shape != (len(self.action_names),):
+        return np.array(self.clip_values(action))
+
+    def clip_values(self, action: Any) -> list[float]:
+        """The action clipped to the bounds, as floats (plain Python: this runs every control period, and numpy
+        calls on a handful of values cost more than the physics of a light world)."""
+        try:
+            vals = [float(v) for v in (action.reshape(-1) if isinstance(action, np.ndarray) else action)]
+        except (TypeError, ValueError):
+            raise DriverError(f"a {self.family} action is a sequence of {len(self.action_names)} numbers "
+                              f"({', '.join(self.action_names)}), not {action!r}") from None
+        if len(vals) != len(self.action_names):
             raise DriverError(f"a {self.family} action has {len(self.action_names)} values "
-                              f"({', '.join(self.action_names)}), not {a.size}")
-        if not np.isfinite(a).all():
-            raise DriverError(f"a {self.family} action must be finite, got {a.tolist()}")
-        return np.minimum(np.maximum(a, self.action_low), self.action_high)
+                              f"({', '.join(self.action_names)}), not {len(vals)}")
+        if not all(math.isfinite(v) for v in vals):
+            raise DriverError(f"a {self.family} action must be finite, got {vals}")
+        bounds = self._bounds
+        if bounds is None:
+            bounds = self._bounds = (self.action_low.tolist(), self.action_high.tolist())
+        return [lo if v < lo else hi if v > hi else v for v, lo, hi in zip(vals, *bounds)]
+
+    _bounds: tuple[list[float], list[float]] | None = None
 
     @abstractmethod
     def apply(self, action: Any) -> None:

@@ -50,7 +50,7 @@ class ContactDriver(Driver):
         return self._high
 
     def apply(self, action: Any) -> None:
-        self.world.data.ctrl[:] = self.clip(action)
+        self.world.data.ctrl[:] = self.clip_values(action)
 
     def command(self) -> np.ndarray:
         return self.world.data.ctrl.copy()

@@ -50,8 +50,8 @@ class PegDriver(Driver):
         return HIGH
 
     def apply(self, action: Any) -> None:
-        y1, z1, r1 = (float(v) for v in self.clip(action))
-        y, z, r = (float(v) for v in self.world.base_pose())
+        y1, z1, r1 = self.clip_values(action)
+        y, z, r = self.world.base_pose().tolist()
         dist = math.hypot(y1 - y, z1 - z)
         if dist > self._v_lin * SLACK:
             y1, z1 = y + (y1 - y) * self._v_lin / dist, z + (z1 - z) * self._v_lin / dist

@@ -18,8 +18,8 @@ from __future__ import annotations
 
 from typing import Any, Callable
 
+import mujoco
 import numpy as np
-from scipy.spatial.transform import Rotation
 
 from kintsugi.methods.policy.drivers.base import Driver, Feature
 from kintsugi.worlds.tabletop.arm_model import JOINTS
@@ -132,7 +132,9 @@ class TabletopDriver(Driver):
             pos, rot = w.tcp_pose(arm)
             obs[f"{arm}_joint_pos"] = w.joint_positions(arm)
             obs[f"{arm}_eef_pos"] = pos
-            obs[f"{arm}_eef_quat"] = self.continuous(arm, Rotation.from_matrix(rot).as_quat(), 3)
+            wxyz = np.empty(4)
+            mujoco.mju_mat2Quat(wxyz, rot.reshape(-1))
+            obs[f"{arm}_eef_quat"] = self.continuous(arm, wxyz[[1, 2, 3, 0]], 3)
             obs[f"{arm}_gripper_opening"] = np.array([w.gripper_opening(arm)])
             obs[f"{arm}_pad_force"] = np.array([w.pad_contacts(arm)[1]])
         if images:
