@@ -103,6 +103,8 @@ class Parser(Nouns):
         self.modifiers(g, verb)
         if verb == "pour" and not g.objects and g.source:
             g.objects = [g.source]
+        if g.objects:
+            self.last_main = list(g.objects)
         if verb != "release" and not g.objects:
             raise self.fail(f"'{word or verb}' needs an object the scene has "
                             f"({', '.join(th.name for th in self.scene.things)})")
@@ -191,9 +193,11 @@ class Parser(Nouns):
             return True
         if self.place_phrase(g):
             return True
-        if not g.objects and self.object_ahead():
-            g.objects = self.noun_phrase(required=True, coordinate=True)
+        if not g.objects and (self.object_ahead() or p in ("the", "a", "an")):
+            g.objects = self.noun_phrase(required=True, coordinate=True, main=True)
             return True
+        if p == "(":
+            raise self.fail("remarks in parentheses are not in the language")
         if p == "its":
             raise self.fail("parts of an object ('its corners', 'its handle') are not in the language; "
                             "name the object itself")

@@ -29,7 +29,7 @@ VERBS = {"pick": "take", "grasp": "take", "grab": "take", "take": "take", "lift"
          "fold": "fold", "use": "use"}
 NEG_VERBS = {"move": "moved", "moving": "moved", "drop": "dropped", "dropping": "dropped", "tip": "tipped",
              "tipping": "tipped", "knock": "tipped", "knocking": "tipped", "topple": "tipped", "toppling": "tipped",
-             "tilt": "tipped", "tilting": "tipped", "spill": "tipped", "spilling": "tipped"}
+             "tilt": "tipped", "tilting": "tipped"}
 ARM_WORDS = frozenset({"arm", "arms", "hand", "hands", "gripper", "grippers"})
 REGION_NOUNS = frozenset({"region", "area", "zone", "target", "patch", "spot"})
 REGION_COLOUR = "green"

@@ -15,6 +15,7 @@ class Nouns:
         self.t = tokens(text)
         self.i = 0
         self.mentions: list[str] = []
+        self.last_main: list[str] = []
         self.current: list[str] = []
         self.lexicon = frozenset().union(*(th.words for th in scene.things)) if scene.things else frozenset()
 
@@ -136,10 +137,15 @@ class Nouns:
         return arms
 
     def noun_phrase(self, required: bool = False, reflexive: list[str] | None = None,
-                    coordinate: bool = False) -> list[str]:
+                    coordinate: bool = False, main: bool = False) -> list[str]:
+        """An object phrase -> the objects it names. `it` as a step's own object is the previous step's object
+        ("take the bottle, pour from it into the cup, then put it back"); elsewhere ("into it", "right of it")
+        the object named last that this phrase is not about."""
         p = self.peek()
         if p == "it":
             self.i += 1
+            if main and not reflexive and len(self.last_main) == 1:
+                return self._mention(list(self.last_main))
             return self._mention([self._it(reflexive)])
         if p == "them" or self.eat("both", "of", "them") or self.eat("each", "of", "them") or p == "both":
             self.i += p in ("them", "both")

@@ -75,6 +75,7 @@ class _Meaning:
                 if obj is not None:
                     self.bind(obj, arms, c)
             for g in c.groups:
+                self.unused(g, c)
                 getattr(self, "do_" + c.verb)(g, c)
                 for what, o in g.without:
                     self.negate(what, o, c)
@@ -99,6 +100,21 @@ class _Meaning:
                                 f"then to the {arm} arm with no hand-over between")
         self.bindings.setdefault(obj, arm)
         st.holder = st.holder or arm
+
+    def unused(self, g: Group, c: Clause) -> None:
+        """A phrase the step's verb does nothing with is refused, never dropped."""
+        allowed = {"take": {"arms", "rims", "up"}, "place": {"arms", "place", "orient", "heading", "side_of", "down",
+                                                             "back", "rims", "stack", "up"},
+                   "pour": {"arms", "source", "place"}, "handover": {"arms", "to_arm", "over"},
+                   "release": {"arms"}, "fold": {"half"}}[c.verb]
+        said = {k for k in ("place", "orient", "heading", "side_of", "source", "to_arm") if getattr(g, k) is not None}
+        said |= {"arms"} if g.arms else set()
+        said |= {"rims"} if g.rims else set()
+        said |= g.particles
+        extra = sorted(said - allowed)
+        if extra:
+            raise NotUnderstood(f"not understood: {c.words!r}: '{c.words.split()[0]}' does nothing with its "
+                                f"{', '.join(extra)} phrase")
 
     def do_take(self, g: Group, c: Clause) -> None:
         if g.place is not None or g.orient is not None:
@@ -130,6 +146,9 @@ class _Meaning:
             if st.place is not None and st.place != place:
                 raise NotUnderstood(f"not understood: {c.words!r}: {o} is placed twice ({st.placed_by!r}, then "
                                     f"{c.words!r}); the language states where each object ends, once")
+            if o in self.supports:
+                raise NotUnderstood(f"not understood: {c.words!r}: {o} moves after something was put on or into "
+                                    "it; say where each object ends, moving a support last is not in the language")
             st.place, st.placed_by, st.released, st.held = place, c.words, True, False
             if g.orient is not None:
                 self.orient(o, g.orient, c)
@@ -217,7 +236,8 @@ class _Meaning:
                 else:
                     goal.append(f"{PLACES[kind]}({o}, {arg[0]})")
                 resting = st.orient
-                if resting is None and kind in ("table", "region", "beside", "left_of", "right_of"):
+                if resting is None and (kind in ("table", "region", "beside", "left_of", "right_of")
+                                        or o in self.supports):
                     resting = self.resting(o)
                 if resting is not None:
                     goal.append(f"{resting}({o})")
@@ -233,6 +253,9 @@ class _Meaning:
                 goal.append(f"released({o})")
         goal += [h for h in self.history if h not in goal]
         goal += [f"not moved({o})" for o in dict.fromkeys(self.not_moved)]
+        if not goal:
+            raise NotUnderstood("not understood: no step of the instruction changes the scene (say what should "
+                                "end where, e.g. 'put the cup on the plate')")
         if self.predicates is not None:
             self.check(goal)
         arms = [a for a in self.scene.arms if a in self.arms] or list(self.scene.arms)
