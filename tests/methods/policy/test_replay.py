@@ -69,7 +69,7 @@ def test_contact_restarts_replay_step_for_step(tmp_path: Path) -> None:
 
 @pytest.mark.slow
 def test_tabletop_drop_trial_replays_with_the_source_action_starts(tmp_path: Path) -> None:
-    spec = TrialSpec(task="pour-single", method="agentchord", condition="drop", seed=22,
+    spec = TrialSpec(task="pour-single", method="agentchord", variant="default", condition="drop", seed=22,
                      overrides={"disturbance.drop_p": 0.1})
     source, again, traj = _record_and_replay(spec, tmp_path)
     assert source.transitions and traj.marks  # the source recovered from a drop
