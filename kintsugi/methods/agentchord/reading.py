@@ -146,9 +146,6 @@ class _Meaning:
             if st.place is not None and st.place != place:
                 raise NotUnderstood(f"not understood: {c.words!r}: {o} is placed twice ({st.placed_by!r}, then "
                                     f"{c.words!r}); the language states where each object ends, once")
-            if o in self.supports:
-                raise NotUnderstood(f"not understood: {c.words!r}: {o} moves after something was put on or into "
-                                    "it; say where each object ends, moving a support last is not in the language")
             st.place, st.placed_by, st.released, st.held = place, c.words, True, False
             if g.orient is not None:
                 self.orient(o, g.orient, c)
