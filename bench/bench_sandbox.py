@@ -1,12 +1,19 @@
-"""What sandboxed cost code costs inside MPPI (target: <= 10 % of the iteration).
+"""What sandboxed cost code costs inside MPPI (target: <= 10 % of the iteration), and what it refuses.
 
-One run, in rotating order so machine drift hits every variant alike: an MPPI step on the
-pusher-and-box scene (K samples, 0.5 s horizon) whose cost is (a) plain numpy written by
-hand and (b) the same cost as model-written source run through the sandbox. Prints medians
-per variant, the sandboxed cost's share of its iteration, the sandbox overhead against the
-hand-written cost, the probe's wall time, the machine, and, last, one JSON line.
+1. One run, in rotating order so machine drift hits every variant alike: an MPPI step on the
+   pusher-and-box scene (K samples, 0.5 s horizon) whose cost is (a) plain numpy written by
+   hand and (b) the same cost as model-written source run through the sandbox. Prints medians
+   per variant, the sandboxed cost's share of its iteration, the sandbox overhead against the
+   hand-written cost and the probe's wall time.
+2. The payload suite (`kintsugi.sandbox.payloads`): every hostile or broken program through the
+   probe (refused? anything escaped, i.e. the canary file written? the slowest refusal), and the
+   state-dependent ones (`IN_LOOP`) through the loop's bound (passed the probe? stopped, and how fast?).
 
-    .venv/bin/python bench/bench_sandbox.py [--samples 256] [--steps 30]
+Last line: one JSON object starting with payloads, escapes (payloads accepted or that wrote the canary),
+max_seconds (the slowest refusal), then
+in_loop, in_loop_stopped, in_loop_max_stop_s, and the MPPI figures.
+
+    .venv/bin/python bench/bench_sandbox.py [--samples 256] [--steps 30] [--no-payloads]
 """
 
 from __future__ import annotations
@@ -26,7 +33,9 @@ import numpy as np  # noqa: E402
 
 from kintsugi.campaign.report import machine_info  # noqa: E402
 from kintsugi.control import MPPI, MPPIConfig  # noqa: E402
+from kintsugi.core.errors import SandboxError  # noqa: E402
 from kintsugi.sandbox import CostProgram, probe  # noqa: E402
+from kintsugi.sandbox import payloads as suite  # noqa: E402
 
 GOAL = np.array([0.35, 0.05, 0.025])
 PUSHER_BOX = """
@@ -74,10 +83,43 @@ def native(box: np.ndarray, tip: np.ndarray, ctrl: np.ndarray) -> np.ndarray:
     return np.mean(to_goal + 0.3 * np.maximum(behind - 0.08, 0) + 0.001 * effort, axis=-1) + 5 * to_goal[:, -1]
 
 
+def payload_suite() -> dict:
+    """Every payload through the probe, every in-loop payload through the probe and then the loop's bound."""
+    refused = escapes = 0
+    slowest = 0.0
+    for source in suite.PAYLOADS:
+        suite.CANARY.unlink(missing_ok=True)
+        t0 = time.perf_counter()
+        try:
+            probe(source, set(suite.ENV), {"cost": (suite.K,)}, suite.ENV, suite.LIMITS)
+        except SandboxError:
+            refused += 1
+        slowest = max(slowest, time.perf_counter() - t0)
+        escapes += int(suite.CANARY.exists())
+    stopped, stop_s = 0, 0.0
+    for source in suite.IN_LOOP:
+        report = probe(source, set(suite.ENV), {"cost": (suite.K,)}, suite.ENV)  # accepted: fast on its samples
+        program = CostProgram.compile(source, set(suite.ENV))
+        program.probed_s.update(report.seconds_per_call)
+        t0 = time.perf_counter()
+        try:
+            program.bounded_call("cost", suite.LOOP_STATE, (suite.LOOP_K,))
+        except SandboxError as exc:
+            stopped += int(exc.kind == "overrun")
+        stop_s = max(stop_s, time.perf_counter() - t0)
+    print(f"payloads: {len(suite.PAYLOADS)}, refused {refused}, escapes {escapes}, slowest refusal {slowest:.2f} s")
+    print(f"in-loop payloads (pass the probe, runaway on the loop's states): {len(suite.IN_LOOP)}, stopped {stopped}, "
+          f"slowest stop {stop_s:.2f} s (bound: 1 s)")
+    return {"payloads": len(suite.PAYLOADS), "escapes": escapes + len(suite.PAYLOADS) - refused,
+            "max_seconds": round(slowest, 3), "in_loop": len(suite.IN_LOOP), "in_loop_stopped": stopped,
+            "in_loop_max_stop_s": round(stop_s, 3)}
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--samples", type=int, default=256)
     ap.add_argument("--steps", type=int, default=30, help="MPPI steps per variant")
+    ap.add_argument("--no-payloads", action="store_true", help="skip the payload suite")
     args = ap.parse_args()
     source = SOURCE
     variables = {"box", "tip", "ctrl", "goal_pos"}
@@ -124,7 +166,8 @@ def main() -> None:
     print(f"sandboxed cost = {share * 100:.2f} % of its MPPI iteration (target <= 10 %); "
           f"{cmed['sandbox'] / cmed['native']:.2f}x the hand-written numpy cost")
     print(f"probe (check + compile + child process + {len(report.seconds_per_call)} function): {t_probe * 1000:.0f} ms")
-    print(json.dumps({"samples": K, "step_ms": med["sandbox"] * 1000, "cost_ms": cmed["sandbox"] * 1000,
+    figures = {} if args.no_payloads else payload_suite()
+    print(json.dumps({**figures, "samples": K, "step_ms": med["sandbox"] * 1000, "cost_ms": cmed["sandbox"] * 1000,
                       "cost_share": share, "overhead_vs_numpy": cmed["sandbox"] / cmed["native"],
                       "probe_ms": t_probe * 1000}))
 

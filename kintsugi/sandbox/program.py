@@ -17,6 +17,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from kintsugi.core.errors import SandboxError
+from kintsugi.sandbox.guard import LoopBound, bounded
 from kintsugi.sandbox.language import CONSTANTS, FUNCTIONS, Signature, check, parse
 
 
@@ -72,6 +73,9 @@ class CostProgram:
     variables: frozenset[str]
     signatures: dict[str, Signature]
     _functions: dict[str, Callable[..., Any]] = field(repr=False)
+    probed_s: dict[str, float] = field(default_factory=dict)
+    """Seconds per call of each function as the probe measured it (filled in by whoever probed it; the loop's
+    bound, `guard.LoopBound`, compares each call against it)."""
 
     @classmethod
     def compile(cls, source: str, variables: set[str] | frozenset[str]) -> "CostProgram":
@@ -90,6 +94,13 @@ class CostProgram:
 
     def has(self, name: str) -> bool:
         return name in self.signatures
+
+    def bounded_call(self, name: str, env: Mapping[str, Any], shape: tuple[int, ...] | None = None,
+                     bound: LoopBound = LoopBound()) -> np.ndarray:
+        """`call` under the control loop's bound: a call far slower than its probe or than the loop's budget
+        raises SandboxError('overrun') instead of stalling the loop (see `guard`)."""
+        probed = self.probed_s.get(name)
+        return bounded(name, bound.limit(probed), probed, lambda: self.call(name, env, shape))
 
     def call(self, name: str, env: Mapping[str, Any], shape: tuple[int, ...] | None = None) -> np.ndarray:
         """Run function `name` with its parameters taken from `env`.
@@ -126,9 +137,10 @@ class CostProgram:
                                         f"{shape}; reduce over the extra axes (e.g. sum(x, axis=-1))") from None
 
     def costs(self, name: str, env: Mapping[str, Any], samples: int) -> tuple[np.ndarray, int]:
-        """(K,) costs for the control loop and how many were not finite: those become +inf, so a sample the
-        code cannot score gets no weight instead of poisoning the others (MPPI's rule for diverged rollouts)."""
-        out = self.call(name, env, (samples,))
+        """(K,) costs for the control loop (a bounded call) and how many were not finite: those become +inf, so a
+        sample the code cannot score gets no weight instead of poisoning the others (MPPI's rule for diverged
+        rollouts)."""
+        out = self.bounded_call(name, env, (samples,))
         bad = ~np.isfinite(out) | np.isnan(out)
         out[bad] = np.inf
         return out, int(np.count_nonzero(bad))

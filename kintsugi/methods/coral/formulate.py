@@ -222,8 +222,8 @@ def check_stages(stages: list[StageSpec], program: CostProgram, regions: list[Re
     return out
 
 
-_PROBED: dict[tuple, str | None] = {}
-"""(source, variables, shapes, limits) -> the probe's refusal or None: the probe is deterministic for the same code
+_PROBED: dict[tuple, tuple[str | None, dict[str, float]]] = {}
+"""(source, variables, shapes, limits) -> the probe's refusal (or None) and its seconds per call: the probe is deterministic for the same code
 and sample inputs (seeded), so a repeated source (a memory recall, a fuzz campaign) is probed once per process."""
 
 
@@ -246,16 +246,19 @@ def probe_code(program: CostProgram, stages: list[StageSpec], req: FormulationRe
     key = (program.source, frozenset(variables), tuple(costs), tuple(states), samples, steps, limits)
     if key not in _PROBED:
         try:
-            probe(program.source, variables, {c: (samples, steps) for c in costs}, sample_env(req, (samples, steps)),
-                  limits)
-            probe(program.source, variables, {c: () for c in states}, sample_env(req, ()), limits)
-            _PROBED[key] = None
+            timed = probe(program.source, variables, {c: (samples, steps) for c in costs},
+                          sample_env(req, (samples, steps)), limits).seconds_per_call
+            timed |= probe(program.source, variables, {c: () for c in states}, sample_env(req, ()),
+                           limits).seconds_per_call
+            _PROBED[key] = (None, timed)
         except SandboxError as exc:
-            _PROBED[key] = f"cost code refused ({exc.kind}): {exc}"[:600]
+            _PROBED[key] = (f"cost code refused ({exc.kind}): {exc}"[:600], {})
         if len(_PROBED) > 256:
             _PROBED.pop(next(iter(_PROBED)))
-    if _PROBED[key] is not None:
-        raise BadReply(_PROBED[key])
+    refusal, timed = _PROBED[key]
+    if refusal is not None:
+        raise BadReply(refusal)
+    program.probed_s.update(timed)  # the loop bounds every call against what the probe measured
 
 
 def check_formulation(reply: FormulationReply, req: FormulationRequest, samples: int, steps: int,

@@ -2,8 +2,9 @@
 
 Each stage's cost calls the compiled program on the rollout batch (lazy variables), its
 transition calls the `done` function on the measured state. A cost that returns NaN or inf
-for a sample gives that sample no weight; a function that fails at run time ends the attempt
-with a `CostCodeError` the method records (the probe makes that rare, never silent).
+for a sample gives that sample no weight; a function that fails at run time, or overruns the
+loop's bound (`kintsugi.sandbox.guard`: far longer than its probe measured, or than the loop's
+budget), ends the attempt with a `CostCodeError` the method records (never silent, never a stall).
 
 A stage whose cost function `c` has companions `c_seed_x`, `c_seed_y`, `c_seed_z` or `c_seed_yaw`
 in the code (functions of the state at stage entry, one number each) restarts its plan's commands
@@ -74,7 +75,7 @@ def _factory(spec: StageSpec, reply: FormulationReply, program: CostProgram, sce
         t0 = obs.t
         if spec.keep is not None:
             try:
-                env0["kept"] = np.asarray(program.call(spec.keep, state_env(obs, scene, env0, None, 0.0)), dtype=float)
+                env0["kept"] = np.asarray(program.bounded_call(spec.keep, state_env(obs, scene, env0, None, 0.0)), dtype=float)
             except SandboxError as exc:
                 raise CostCodeError(f"stage {spec.name} keep: {exc}") from None
 
@@ -82,7 +83,7 @@ def _factory(spec: StageSpec, reply: FormulationReply, program: CostProgram, sce
             start = time.perf_counter()
             try:
                 k = view.tcp.shape[0]
-                run = program.call(spec.cost, rollout_env(view, scene, env0, attractor), view.tcp.shape[:2])
+                run = program.bounded_call(spec.cost, rollout_env(view, scene, env0, attractor), view.tcp.shape[:2])
             except SandboxError as exc:
                 raise CostCodeError(f"stage {spec.name}: {exc}") from None
             out = total(run)
@@ -97,7 +98,7 @@ def _factory(spec: StageSpec, reply: FormulationReply, program: CostProgram, sce
 
         def done(o: Observation) -> bool:
             try:
-                return _truthy(program.call(spec.done, state_env(o, scene, env0, attractor, o.t - t0)))
+                return _truthy(program.bounded_call(spec.done, state_env(o, scene, env0, attractor, o.t - t0)))
             except SandboxError as exc:
                 raise CostCodeError(f"stage {spec.name} transition: {exc}") from None
 
@@ -122,7 +123,7 @@ def _grip(spec: StageSpec, program: CostProgram, obs: Observation, scene: Scene,
     if g == "free":
         return None
     try:
-        value = float(np.asarray(program.call(g, state_env(obs, scene, env0, None, 0.0)), dtype=float).ravel()[0])
+        value = float(np.asarray(program.bounded_call(g, state_env(obs, scene, env0, None, 0.0)), dtype=float).ravel()[0])
     except (SandboxError, IndexError) as exc:
         raise CostCodeError(f"stage {spec.name} grip: {exc}") from None
     if not np.isfinite(value):
@@ -154,7 +155,7 @@ def _seed(spec: StageSpec, program: CostProgram, obs: Observation, scene: Scene,
     out: dict[int, float] = {}
     for name, index in seed_functions(spec.cost, program.has).items():
         try:
-            value = np.asarray(program.call(name, state_env(obs, scene, env0, None, 0.0)), dtype=float).ravel()
+            value = np.asarray(program.bounded_call(name, state_env(obs, scene, env0, None, 0.0)), dtype=float).ravel()
         except SandboxError as exc:
             raise CostCodeError(f"stage {spec.name} seed: {exc}") from None
         if value.size != 1 or not np.isfinite(value[0]):
