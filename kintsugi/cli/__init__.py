@@ -304,6 +304,7 @@ def export(
 
 
 from kintsugi.cli import info  # noqa: E402,F401 - registers tasks, methods, reasoners and config
+from kintsugi.cli import watch_cmd  # noqa: E402,F401 - registers `kintsugi watch` (live page / viewer)
 
 
 def main() -> None:  # pragma: no cover
