@@ -104,7 +104,7 @@ class AgentChord:
             conductor = Conductor(g, robot, keyframes, log, steps_per_tick, compiled_kf,
                                   ConductorConfig(**self.config.model_dump(include=set(ConductorConfig.model_fields))),
                                   seen=first.objects)
-            conductor.replan = self._replanner(reasoner, conductor, robot, first)
+            conductor.replan = self._replanner(reasoner, conductor, robot, first, list(compiled.composer.goal))
             conductor.tops.observe(first.objects)
             conductor.heads.seed(first.objects)
             try:
@@ -125,18 +125,19 @@ class AgentChord:
         finally:
             log.transcript.extend(r.model_dump(mode="json") for r in reasoner.records)
 
-    def _replanner(self, reasoner: Any, conductor: Conductor, robot: Any, first: Any) -> Any:
+    def _replanner(self, reasoner: Any, conductor: Conductor, robot: Any, first: Any, read: list[str]) -> Any:
         """The conductor's fallback: compose and arrange again from the current observation (remembering the first
-        one's static facts), for the goal less the pours already seen done; None when the goal already holds."""
+        one's static facts), for the goal the composer read from the instruction (`read`) less the pours already
+        seen done; None when the goal already holds."""
         from kintsugi.methods.agentchord.composer import GoalHolds
 
         def replan() -> Any:
             done = {f"poured({o}, {c})" for (o, c), ok in conductor.pours.items() if ok}
-            goal = [g for g in self.ctx.task.goal if g.replace(" ", "") not in {d.replace(" ", "") for d in done}]
+            goal = [g for g in read if g.replace(" ", "") not in {d.replace(" ", "") for d in done}]
             obs = robot.observation(images=reasoner.sees_images)
             try:
                 compiled = compile_graph(reasoner, self.ctx.task, obs, arranger=self.arranger,
-                                         goal=goal if len(goal) < len(self.ctx.task.goal) else None,
+                                         goal=goal if len(goal) < len(read) else None,
                                          cfg=self.ctx.cfg, first=first)
             except GoalHolds:
                 return None

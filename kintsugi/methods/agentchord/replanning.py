@@ -50,6 +50,8 @@ class Replanning:
         from kintsugi.reasoning.base import RecordingReasoner
 
         self.robot, self.log = robot, log
+        self.goal: list[str] = []
+        """The goal the first composition read from the instruction (the task's own goal is the scorer's)."""
         self.done: set[str] = set()
         """Goal facts about history (no constraint can observe them later, e.g. poured) already achieved at a
         verified sub-goal: a re-plan keeps them (the reasoner remembers what it did), the rest is re-observed."""
@@ -122,9 +124,11 @@ class Replanning:
             self.first_obs = obs
             self.tops.observe(obs.objects)
             self.heads.seed(obs.objects)
-        goal = [g for g in self.ctx.task.goal if g not in self.done] or None
+        goal = [g for g in self.goal if g not in self.done] or None
         compiled = compile_graph(self.reasoner, self.ctx.task, obs, arranger=self.style == "code-as-monitor",
                                  goal=goal, cfg=self.ctx.cfg, first=None if first else self.first_obs)
+        if not self.goal:
+            self.goal = list(compiled.composer.goal)
         graph = compiled.graph
         if self.style == "code-as-monitor":  # detect only: the reasoner is asked again instead of a branch
             graph = TaskGraph.from_data({**graph.model_dump(), "nodes": [n.model_dump() for n in graph.nodes
@@ -174,7 +178,7 @@ class Replanning:
 
         lasting = _lasting_unseen()
         facts = set(self.node_facts.get(node, []))
-        for g in self.ctx.task.goal:
+        for g in self.goal:
             positive, name, args = parse_atom(g)
             if positive and name in lasting and f"{name}({', '.join(args)})" in facts:
                 self.done.add(g)

@@ -51,3 +51,27 @@ def test_fold_towel_is_refused_at_compile_time_not_with_a_parser_error() -> None
 
     with pytest.raises(NotUnderstood, match="not understood: 'its two bottom corners.*parts of an object"):
         compile_for_task("fold-towel", "none", 0, {}, ReasonerSettings())
+
+
+def test_the_tasks_own_goal_never_reaches_the_method() -> None:
+    """Poisoned truth: with the task's goal predicates replaced by nonsense, AgentChord composes the same graph
+    (it reads the instruction only)."""
+    from dataclasses import replace
+
+    from kintsugi.core.record import ReasonerSettings
+    from kintsugi.methods.agentchord.compile import compile_graph
+    from kintsugi.reasoning import make_reasoner
+    from kintsugi.worlds.tabletop.robot import TabletopRobot
+
+    t = TASKS.get("pour-single").factory()
+    cfg = t.config({})
+    world, *_ = t.build(cfg, "none", 0)
+    try:
+        obs = TabletopRobot(world).observation(images=False)
+    finally:
+        world.close()
+    poisoned = replace(t.spec, goal=("poured(cup, bottle)", "not upright(cup)", "held_up(bottle)"))
+    runs = [compile_graph(make_reasoner(ReasonerSettings()), s, obs, cfg=cfg) for s in (t.spec, poisoned)]
+    assert runs[0].composer.goal == runs[1].composer.goal and sorted(runs[0].composer.goal) == sorted(t.spec.goal)
+    assert runs[0].composer.edge_operators == runs[1].composer.edge_operators
+    assert len(runs[0].graph.edges) == len(runs[1].graph.edges)
