@@ -35,6 +35,10 @@ INSIDE_FLOOR_M = 0.014
 """Placing into a shallow container: release this high above the table (its floor plus a clearance)."""
 INSIDE_MARGIN_M = 0.01
 """`inside`: the object's centre this far within the container's outer footprint (clear of a rim's width)."""
+INSIDE_BELOW_RIM_M = 0.008
+INSIDE_FLOOR_SLACK_M = 0.005
+"""`inside`: the object's bottom at least INSIDE_BELOW_RIM_M below the container's rim and no lower than its
+bottom (less this slack): in it, not resting on its rim, and not under it."""
 RIM_FORWARD_M = 0.05
 RIM_HOLD_Z_M = 0.025
 RIM_INSET_M = 0.003
@@ -123,10 +127,12 @@ PREDICATES = [
     _p("dropped", ["object"], "the object fell from a gripper (history; no action makes it)"),
     _p("inside", ["object", "object"], "the first object stands inside the second (a container): its centre within "
        "the container's footprint seen from above (its perceived length along its axis and width across it), "
-       "clear of the rims, and its bottom below the container's rim",
+       "clear of the rims, its bottom below the container's rim and above the container's bottom",
        [{"kind": "within", "point": {"entity": "?1"}, "container": "?2", "margin": INSIDE_MARGIN_M},
         {"kind": "above", "a": {"entity": "?2", "feature": "top"}, "b": {"entity": "?1", "feature": "bottom"},
-         "min_gap": 0.0}]),
+         "min_gap": INSIDE_BELOW_RIM_M},
+        {"kind": "above", "a": {"entity": "?1", "feature": "bottom"}, "b": {"entity": "?2", "feature": "bottom"},
+         "min_gap": -INSIDE_FLOOR_SLACK_M}]),
     _p("moved", ["object"], "the object was carried away from where it was first seen"),
     _p("reaches", ["arm", "object"], "the object lies within the arm's reach (its perceived centre within the "
        "domain's reach_m of the arm's base)"),
@@ -152,6 +158,11 @@ PREDICATES = [
 ]
 
 
+RELATIONS = [f"{r}({a}, {b})" for r in ("on", "beside", "left_of", "right_of", "inside", "in_region")
+             for a, b in (("?obj", "_"), ("_", "?obj")) if not (r == "in_region" and a == "_")]
+"""What lifting an object ends: its relations to others, and theirs to it (wild deletes)."""
+
+
 def _op(name, params, pre, add, delete, actions, cost, description) -> OperatorSpec:  # noqa: ANN001
     return OperatorSpec(name=name, params=params, pre=pre, add=add, delete=delete, actions=actions, cost=cost,
                         description=description)
@@ -173,7 +184,7 @@ OPERATORS = [
         [{"name": "grasp", "args": {"arm": A, "obj": O, "pre_grasp_offset": 0.08}}], 260,
         "open, approach an upright object side-on from its pre-grasp pose, close on it"),
     _op("lift", {A: "arm", O: "object"}, ["holding(?arm, ?obj)", "on_table(?obj)"],
-        ["lifted(?obj)"], ["on_table(?obj)"],
+        ["lifted(?obj)"], ["on_table(?obj)", *RELATIONS],
         [{"name": "move_by_offset", "args": {"arm": A, "dxyz": [0.0, 0.0, LIFT_M]}}], 90,
         "raise the held object straight up"),
     _op("carry_over", {A: "arm", O: "object", T: "object"},

@@ -59,12 +59,61 @@ def observed_facts(request: Any, domain: Domain, places: list[str] = ()) -> Stat
             facts |= {("heading", o.name, d) for d, psi in domain.directions.items()
                       if yaw is not None and abs(wrap_deg(yaw - psi)) <= tol}
     facts |= reach_facts(request, domain, known)
+    facts |= checked_facts(request, domain, places)
     for p in places:
         if "direction" in known and p in domain.directions:
             facts.add(("direction", p))
         elif "region" in known:
             facts.add(("region", p))
     return frozenset(facts)
+
+
+READ_DIRECTLY = frozenset({"hand_empty", "holding", "upright", "on_table", "lifted", "released", "stands", "narrow",
+                           "flat", "heading", "reaches", "nearer", "region", "direction", "tilted"})
+"""Predicates `observed_facts` reads by rules of their own (the arms' pads, perception's uprightness, ...), and
+`tilted`, the pouring pose only `pour` makes (a lying fork's axis is level too, and that is no pour); every other
+predicate with constraints is read by evaluating them (`checked_facts`)."""
+
+
+def checked_facts(request: Any, domain: Domain, places: list[str] = ()) -> set[Atom]:
+    """The facts of every other predicate over objects and places that has constraint templates (on, inside,
+    beside, left_of, over, in_region, ...): true where all its constraints hold on the perceived scene (the
+    same check a sub-goal node makes), for every grounding over the visible objects and the goal's places.
+    Predicates without constraints (history: poured, dropped, moved) start false."""
+    import itertools
+    import math
+
+    from kintsugi.methods.agentchord.templates import fill
+    from kintsugi.taskgraph.constraints import Constraint
+    from kintsugi.taskgraph.features import Features
+    from pydantic import TypeAdapter
+
+    seen = {o.name: o for o in request.objects if o.visible and o.centroid is not None}
+    regions = [p for p in places if p not in domain.directions]
+    try:
+        where = place_table(regions, domain, {o.name: o for o in request.objects}, dict(getattr(request, "regions", {})))
+    except PlanningError:
+        where = {}
+    pools = {"object": list(seen), "place": [p for p in regions if p in where]}
+    feats = Features(objects=seen)
+    adapter = TypeAdapter(Constraint)
+    out: set[Atom] = set()
+    for spec in domain.predicates:
+        if spec.name in READ_DIRECTLY or not spec.constraints or any(t not in pools for t in spec.params):
+            continue
+        for args in itertools.product(*(pools[t] for t in spec.params)):
+            objs = [a for a, t in zip(args, spec.params) if t == "object"]
+            if len(set(objs)) != len(objs):
+                continue
+            binding = {f"?{i + 1}": a for i, a in enumerate(args)}
+            try:
+                values = [adapter.validate_python(fill(c, binding, seen, where)).evaluate(feats)
+                          for c in spec.constraints]
+            except (PlanningError, ValueError):
+                continue
+            if values and all(v <= 0.0 for v in values if not math.isnan(v)) and not any(map(math.isnan, values)):
+                out.add((spec.name, *args))
+    return out
 
 
 def reach_facts(request: Any, domain: Domain, known: set[str]) -> set[Atom]:
