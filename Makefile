@@ -1,6 +1,6 @@
 # Two commands for a fresh machine (Python 3.11 + the package registries):
-#   make demo   set up, then run a small offline campaign of each system (A peg insertion, B AgentChord,
-#               C CoRAL) and print their tables
+#   make demo   set up, then tour the three systems offline (A peg insertion, B AgentChord against rekep
+#               under drops, C CoRAL against L2R), print each system's tables and write runs/demo/index.html
 #   make test   set up, build the real model servers once per machine (mk/servers.mk), then run the test suite
 PY ?= python3
 VENV := .venv
@@ -17,12 +17,13 @@ setup: $(BIN)/kintsugi
 
 demo: setup
 	$(BIN)/kintsugi bench peg-insertion --methods baseline,recovery --shapes round,square,rectangle \
-		--conditions none,all --trials 5 --workers 2 --out runs/demo/peg-insertion
-	$(BIN)/kintsugi bench pour-single --methods scripted,agentchord --conditions drop \
-		--set disturbance.drop_p=0.3 --trials 3 --workers 2 --out runs/demo/pour-single
-	$(BIN)/kintsugi bench flip-box --methods coral,l2r --trials 2 --workers 2 --out runs/demo/flip-box
-
-include mk/servers.mk
+		--conditions all --trials 5 --workers 2 --videos-per-cell 1 --out runs/demo/a-peg-insertion
+	$(BIN)/kintsugi bench pour-single --methods rekep,agentchord --conditions drop \
+		--set disturbance.drop_p=0.3 --trials 3 --workers 2 --videos-per-cell 1 --out runs/demo/b-pour-single
+	$(BIN)/kintsugi bench flip-box --methods coral,l2r --trials 1 --workers 2 --videos-per-cell 1 \
+		--out runs/demo/c-flip-box
+	$(BIN)/kintsugi report runs/demo
+	@echo "open runs/demo/index.html: the three systems' tables, a video of each, a page per trial"
 
 test: setup servers
 	$(BIN)/pytest -n 2

@@ -91,16 +91,34 @@ def _records_for(cfg: CampaignConfig, records: Sequence[TrialRecord]) -> list[Tr
     return [r for r in records if r.key in wanted]
 
 
+def _trials_html(recs: Sequence[TrialRecord], pages: dict[str, str]) -> str:
+    """A table of the trials, each linked to its page (relative to the report)."""
+    if not pages:
+        return ""
+    esc = html.escape
+    rows = "".join(
+        f'<tr><td class="l"><a href="{esc(pages[r.key])}">{esc(r.key)}</a></td>'
+        f'<td class="l">{"success" if r.success else "failure"}</td>'
+        f'<td class="l">{"success" if r.framework_success else "failure"}</td>'
+        f'<td class="r">{r.sim_time:.1f}</td><td class="r">{r.reasoning_calls}</td>'
+        f'<td class="l">{esc((r.error or "").splitlines()[0][:120]) if r.error else ""}</td></tr>'
+        for r in recs if r.key in pages)
+    return ("<h2>Trials</h2><table><thead><tr><th>trial</th><th>ground truth</th><th>verdict</th><th>sim s</th>"
+            f"<th>calls</th><th>error</th></tr></thead><tbody>{rows}</tbody></table>")
+
+
 def write_report(
     out_dir: str | Path,
     cfg: CampaignConfig | None = None,
     records: Sequence[TrialRecord] | None = None,
+    trial_pages: dict[str, str] | None = None,
 ) -> tuple[Path, Path]:
     """Write report.md and report.html into `out_dir`; config and records default to what it holds.
 
     Only records belonging to the config's trials are reported (a campaign whose
     trial count shrank keeps its extra lines on disk, but they are not counted). The tables and
     plots are those of the task's system (`tables_for`), the generic ones for a task of no system.
+    `trial_pages` ({key: path relative to `out_dir`}) adds a table of the trials linking their pages.
     """
     out = Path(out_dir)
     store = ResultStore(out)
@@ -120,6 +138,11 @@ def write_report(
     videos = _videos(out, recs)
     if videos:
         md += ["## Videos", ""] + [f"- [{key}]({rel})" for key, rel in videos] + [""]
+    pages = {r.key: trial_pages[r.key] for r in recs if trial_pages and r.key in trial_pages}
+    if pages:
+        md += ["## Trials", "", "| trial | ground truth | verdict |", "|---|---|---|"]
+        md += [f"| [{r.key}]({pages[r.key]}) | {'success' if r.success else 'failure'} | "
+               f"{'success' if r.framework_success else 'failure'} |" for r in recs if r.key in pages] + [""]
     md += ["## Campaign config", "", "```json", cfg_json, "```", "", "## Machine", ""]
     md += [f"- {k}: {v}" for k, v in info.items()]
     md_path = out / "report.md"
@@ -136,6 +159,7 @@ def write_report(
         f"<h2>Plots</h2>{figs}" if figs else "",
         ("<h2>Videos</h2><ul>" + "".join(f'<li><a href="{esc(rel)}">{esc(key)}</a></li>' for key, rel in videos)
          + "</ul>") if videos else "",
+        _trials_html(recs, pages),
         f"<h2>Campaign config</h2><pre>{esc(cfg_json)}</pre>",
         "<h2>Machine</h2><ul>" + "".join(f"<li>{esc(k)}: {esc(v)}</li>" for k, v in info.items()) + "</ul>",
     ]

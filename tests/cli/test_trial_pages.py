@@ -1,0 +1,78 @@
+"""Browser pages: `kintsugi report` writes a page per trial beside report.html and, over a directory of
+campaigns, an index; every link is relative and resolves, every page shows what its trial holds."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from urllib.parse import unquote
+
+import pytest
+from typer.testing import CliRunner
+
+from kintsugi.cli import app
+from kintsugi.cli.pages import write_trial_page
+from kintsugi.core.record import TrialRecord, TrialSpec
+
+runner = CliRunner()
+
+
+def links(page: Path) -> list[str]:
+    return [x for x in re.findall(r'(?:href|src)="([^"#]+)"', page.read_text()) if not x.startswith("data:")]
+
+
+def assert_links_resolve(page: Path) -> None:
+    for link in links(page):
+        assert not link.startswith(("/", "file:", "http")), (page, link)  # relative: the directory can move
+        assert (page.parent / unquote(link)).exists(), (page, link)
+
+
+@pytest.mark.slow
+def test_report_writes_linked_trial_pages_and_an_index(tmp_path: Path) -> None:
+    camp = tmp_path / "tour" / "a-peg"
+    res = runner.invoke(app, ["bench", "peg-insertion", "--methods", "baseline,recovery", "--conditions", "all",
+                              "--trials", "2", "--videos-per-cell", "1", "--executor", "inline",
+                              "--out", str(camp)])
+    assert res.exit_code == 0, res.output
+    report = camp / "report.html"
+    pages = [link for link in links(report) if link.startswith("trials/")]
+    assert len(pages) == 4  # a page per trial, linked from the report
+    assert_links_resolve(report)
+    for link in pages:
+        page = camp / link
+        assert_links_resolve(page)
+        text = page.read_text()
+        assert "<h2>Timeline</h2>" in text and "ground truth" in text and "../report.html" in text
+        if "recovery" in link:
+            assert "<h2>Reasoning calls</h2><table>" in text and "judge" in text
+        if link.endswith("__0.html"):
+            assert "<video" in text  # the first trial of each cell has a video
+    res = runner.invoke(app, ["report", str(tmp_path / "tour")])
+    assert res.exit_code == 0, res.output
+    index = tmp_path / "tour" / "index.html"
+    assert_links_resolve(index)
+    text = index.read_text()
+    assert "a-peg/report.html" in text and "<video" in text and "__recovery__" in text.split("<video")[1][:200]
+    assert "<h3>Table II" in text
+
+
+def test_a_trial_page_shows_the_planner_plot_and_the_composer_graph(tmp_path: Path) -> None:
+    from tests.taskgraph_fixtures import pour_graph_data
+
+    (tmp_path / "videos").mkdir()
+    (tmp_path / "report.html").write_text("<html></html>")
+    video = tmp_path / "videos" / "t.mp4"
+    video.write_bytes(b"not really a video")
+    video.with_suffix(".plan.png").write_bytes(b"png")
+    spec = TrialSpec(task="flip-box", method="coral", variant="default", condition="all", seed=0)
+    rec = TrialRecord(**spec.identity(), success=True, framework_success=True, video=str(video),
+                      transcript=[{"role": "composer", "backend": "embedded", "request": {},
+                                   "reply": {"graph": pour_graph_data()}, "latency_s": 0.01},
+                                  {"role": "arranger", "backend": "embedded", "request": {"a": "<b>"},
+                                   "reply": None, "error": "refused <script>", "latency_s": 0.02}])
+    page = write_trial_page(rec, tmp_path / "trials")
+    assert_links_resolve(page)
+    text = page.read_text()
+    assert 'src="../videos/t.mp4"' in text and 'src="../videos/t.plan.png"' in text
+    assert "<h2>Task graph</h2>" in text and (tmp_path / "trials" / (page.stem + ".graph.html")).exists()
+    assert "<script>" not in text and "refused &lt;script&gt;" in text  # record text is escaped
