@@ -25,6 +25,8 @@ demo: setup
 	$(BIN)/kintsugi report runs/demo
 	@echo "open runs/demo/index.html: the three systems' tables, a video of each, a page per trial"
 
+include mk/servers.mk
+
 test: setup servers
 	$(BIN)/pytest -n 2
 
