@@ -27,7 +27,7 @@ demo: setup
 
 include mk/servers.mk
 
-test: setup servers
+test: setup
 	$(BIN)/pytest -n 2
 
 .PHONY: setup demo test

@@ -15,7 +15,8 @@ exec 9>"$CACHE/.tools.lock"
 flock 9
 if [ -f "$DONE" ]; then echo "$VENV/bin/python"; exit 0; fi
 [ -x "$VENV/bin/python" ] || "$PY" -m venv "$VENV"
-"$VENV/bin/pip" install --quiet --disable-pip-version-check "gguf==$GGUF_VERSION" >&2
+[ -f "$VENV/.kintsugi-gguf-ok" ] || { "$VENV/bin/pip" install --quiet --disable-pip-version-check \
+  "gguf==$GGUF_VERSION" >&2 && touch "$VENV/.kintsugi-gguf-ok"; }
 SDIST="$CACHE/llama_cpp_python-$VERSION.tar.gz"
 SRC="llama-cpp-python[server]==$VERSION"
 [ -f "$SDIST" ] && SRC="llama-cpp-python[server] @ file://$SDIST"

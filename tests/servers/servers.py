@@ -22,6 +22,7 @@ CACHE = Path(os.environ.get("KINTSUGI_CACHE", Path.home() / ".cache" / "kintsugi
 LLAMA_SERVER = CACHE / "bin" / "llama-server"
 TOOLS_PYTHON = CACHE / "venv" / "bin" / "python"
 TOOLS_OK = CACHE / "venv" / ".kintsugi-tools-ok"
+GGUF_OK = CACHE / "venv" / ".kintsugi-gguf-ok"
 UNAVAILABLE = CACHE / "unavailable.txt"
 """Written by `make servers` when this machine cannot build the servers (no compiler, no cmake): the reason."""
 PROMPTS = sorted(REPO.glob("kintsugi/methods/*/prompts/*.md"))
@@ -29,12 +30,14 @@ START_TIMEOUT_S = 60.0
 
 
 def missing(what: str) -> str | None:
-    """Why `what` ('llama-server' or 'llama-cpp-python') cannot be used here, or None when it can."""
+    """Why `what` ('gguf', 'llama-server' or 'llama-cpp-python') cannot be used here, or None when it can."""
     if UNAVAILABLE.exists():
         return f"the real-server build is impossible on this machine: {UNAVAILABLE.read_text().strip()}"
     if what == "llama-server" and not LLAMA_SERVER.exists():
         return f"{LLAMA_SERVER} is not built; run `make servers` (tests/servers/build_llama_server.sh)"
-    if not TOOLS_OK.exists():
+    if not GGUF_OK.exists():
+        return f"the servers' tool venv {CACHE / 'venv'} has no gguf; run `make servers` (tests/servers/build_tools.sh)"
+    if what == "llama-cpp-python" and not TOOLS_OK.exists():
         return f"the servers' tool venv {CACHE / 'venv'} is not built; run `make servers` (tests/servers/build_tools.sh)"
     return None
 
