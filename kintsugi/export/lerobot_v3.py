@@ -173,7 +173,7 @@ def _open_video(path: Path, fps: float) -> Any:
     import imageio.v2 as imageio
 
     path.parent.mkdir(parents=True, exist_ok=True)
-    return imageio.get_writer(path, fps=fps, codec="libx264", pixelformat="yuv420p", macro_block_size=16,
+    return imageio.get_writer(path, fps=fps, codec="libx264", pixelformat="yuv420p", macro_block_size=2,
                               quality=None, ffmpeg_params=["-g", "2", "-crf", "23"], ffmpeg_log_level="error")
 
 
