@@ -38,6 +38,8 @@ PULL_M = 0.15
 COMFORT_M = 0.5
 """Distance from the arm's base (horizontal) a dragged object is brought towards."""
 PULL_LIFT_M = 0.015
+PULL_PITCHES_DEG = (30.0, -30.0, 50.0, -50.0)
+"""Hand tilts tried for the drag's grasp when no straight-down one reaches (leaning in from the arm's side)."""
 YAW_TURNS_DEG = (30.0, -30.0, 60.0, -60.0, 90.0, -90.0)
 PLACE_RINGS_M = (0.03, 0.06, 0.09, 0.12)
 FREE_PLACE_M = 0.12
@@ -203,7 +205,8 @@ class Reaching:
         if float(np.linalg.norm(move)) < SLIDE_STEP_M:
             return False
         grip = {"action": "grasp", "arm": arm, "obj": call["obj"], "pre_grasp_offset": PULL_PRE_GRASP_M}
-        for alt in [grip] + slides(grip, f, base, PULL_GRASP_MARGIN_M):
+        takes = [grip] + slides(grip, f, base, PULL_GRASP_MARGIN_M)
+        for alt in takes + [{**t, "pitch_deg": p} for p in PULL_PITCHES_DEG for t in takes]:
             if not self.feasible(alt):
                 continue
             self._execute(edge, "grasp", {k: v for k, v in alt.items() if k != "action"}, unplanned_ok=True)

@@ -52,6 +52,9 @@ class Grasp(_Action):
     closing across the object's principal axis)."""
     close_s: float = Field(0.0, ge=0.0, le=2.0)
     """Close gently: the fingers are brought closed over this many seconds (0: at once)."""
+    pitch_deg: float = Field(0.0, ge=-60.0, le=60.0)
+    """A top-down grasp only: tilt the hand about its closing axis by this much (a hand leaning in from the
+    arm's side reaches farther out than one pointing straight down)."""
 
 
 class OpenGripper(_Action):

@@ -255,6 +255,8 @@ class Planner:
                 along = math.atan2(f.axis[1], f.axis[0])  # close across the principal axis
                 yaw = radial + _wrap_half_turn(along - radial)
             rot = square_to(down_rotation(yaw), f)
+            if a.pitch_deg:
+                rot = rot @ Rotation.from_euler("y", a.pitch_deg, degrees=True).as_matrix()
             c[2] = max(c[2], PAD_HALF[2] + TABLE_CLEARANCE_M)
             style = "top-down" + (" (fallen)" if shape.grasp == "side_if_upright" else "")
         approach = rot[:, 2]

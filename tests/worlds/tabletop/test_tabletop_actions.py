@@ -63,6 +63,16 @@ def test_unreachable_target_is_an_ik_failure_and_nothing_moves(scene) -> None:
     assert world.steps == steps0 and np.array_equal(world.joint_targets("right"), q0)
 
 
+def test_plan_only_moves_nothing_and_says_whether_a_target_was_clipped(scene) -> None:
+    world, robot = scene
+    q0, steps0 = world.joint_targets("right").copy(), world.steps
+    far = robot.execute({"action": "move_to_target", "arm": "right", "xyz": (0.8, -0.3, 0.3),
+                          "rpy_deg": (0.0, 90.0, 0.0)}, plan_only=True)
+    grasp = robot.execute({"action": "grasp", "arm": "right", "obj": "bottle"}, plan_only=True)
+    assert far.planned and far.clipped and grasp.planned and not grasp.clipped and not grasp.reached
+    assert world.steps == steps0 and np.array_equal(world.joint_targets("right"), q0)
+
+
 def test_targets_are_clipped_to_the_workspace(scene) -> None:
     cfg = TabletopConfig()
     ik = ArmIK(cfg.robot, cfg.motion, "right")
