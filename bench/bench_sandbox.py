@@ -34,7 +34,7 @@ import numpy as np  # noqa: E402
 from kintsugi.campaign.report import machine_info  # noqa: E402
 from kintsugi.control import MPPI, MPPIConfig  # noqa: E402
 from kintsugi.core.errors import SandboxError  # noqa: E402
-from kintsugi.sandbox import CostProgram, probe  # noqa: E402
+from kintsugi.sandbox import CostProgram, ProbeLimits, probe  # noqa: E402
 from kintsugi.sandbox import payloads as suite  # noqa: E402
 
 GOAL = np.array([0.35, 0.05, 0.025])
@@ -98,7 +98,8 @@ def payload_suite() -> dict:
         escapes += int(suite.CANARY.exists())
     stopped, stop_s = 0, 0.0
     for source in suite.IN_LOOP:
-        report = probe(source, set(suite.ENV), {"cost": (suite.K,)}, suite.ENV)  # accepted: fast on its samples
+        # accepted: fast on its samples (a long wall allowance: on a loaded machine the child starts slowly)
+        report = probe(source, set(suite.ENV), {"cost": (suite.K,)}, suite.ENV, ProbeLimits(wall_s=60.0))
         program = CostProgram.compile(source, set(suite.ENV))
         program.probed_s.update(report.seconds_per_call)
         t0 = time.perf_counter()

@@ -101,7 +101,8 @@ class StagedPlanner:
                                       obs.ctrl, obs.t)
             self.mppi.step(data)
             self._record(stage, obs)
-            obs = robot.act(self.mppi.action_at, min(period, t_end - obs.t), feedback=stage.feedback)
+            obs = robot.act(self.mppi.action_at, min(period, t_end - obs.t), feedback=stage.feedback,
+                            on_tick=machine.watch if stage.hold_s > 0 else None)
         machine.close(obs)
         self._report(machine, log)
         return AttemptResult(reached=machine.succeeded, stages=list(machine.history), obs=obs)

@@ -33,7 +33,8 @@ class Stage:
     timeout_s: float = math.inf
     """A stage that has not finished by then fails the attempt."""
     hold_s: float = 0.0
-    """`done` must hold this long without a break before the machine moves on."""
+    """`done` must hold this long without a break before the machine moves on; a stage with a hold has its
+    condition watched at the robot's inner rate (`StageMachine.watch`), as a scorer watches an unbroken band."""
     feedback: Feedback | None = None
     """Eq. 5's reactive correction at the inner rate while this stage runs."""
     attractors: tuple[Attractor, ...] = ()
@@ -98,6 +99,16 @@ class StageMachine:
         if self.stage is not None:
             self._leave(obs, reached=False)
             self.stage = None
+
+    def watch(self, obs: Observation) -> None:
+        """An inner-rate observation between two updates: a stage with a hold restarts its hold timer when its
+        condition breaks at any tick, not only at the ticks the planner replans on."""
+        if self.stage is None or self.finished or self.stage.hold_s <= 0:
+            return
+        if not self.stage.done(obs):
+            self._held_since = None
+        elif self._held_since is None:
+            self._held_since = obs.t
 
     @property
     def succeeded(self) -> bool:

@@ -119,9 +119,11 @@ class ContactRobot:
             objects=pose_tracker(w), ctrl=d.ctrl.copy(),
         )
 
-    def act(self, action: np.ndarray | Plan, duration_s: float, feedback: Feedback | None = None) -> Observation:
+    def act(self, action: np.ndarray | Plan, duration_s: float, feedback: Feedback | None = None,
+            on_tick: Callable[[Observation], None] | None = None) -> Observation:
         """Send `action` (x, y, z, yaw, opening targets; or a plan over sim time) for `duration_s`,
-        corrected by `feedback` at the inner rate; every inner tick is logged. Returns the last observation."""
+        corrected by `feedback` at the inner rate; every inner tick is logged and its new observation passed to
+        `on_tick` (a condition that must hold without a break is watched at this rate). Returns the last one."""
         w = self._world
         ticks = max(1, round(duration_s / self.inner_dt))
         obs = self.observe()
@@ -135,6 +137,8 @@ class ContactRobot:
             for watch in self._watchers:
                 watch(w)
             obs = self.observe()
+            if on_tick is not None:
+                on_tick(obs)
         return obs
 
     def restart(self) -> Observation:

@@ -21,7 +21,7 @@ from kintsugi.methods.coral.method import probe_limits
 from kintsugi.methods.coral.stages import CodeTiming, CostCodeError, build_stages
 from kintsugi.methods.coral.types import FormulationReply, StageSpec
 from kintsugi.methods.mppi.execute import run_attempt
-from kintsugi.sandbox import CostProgram, LoopBound, probe
+from kintsugi.sandbox import CostProgram, LoopBound, ProbeLimits, probe
 from kintsugi.sandbox.payloads import ENV, IN_LOOP, LOOP_K, LOOP_STATE, K
 from kintsugi.worlds.contact.robot import ContactRobot
 from kintsugi.worlds.contact.world import PlanningWorld
@@ -44,7 +44,7 @@ def done(tcp):
 
 @pytest.mark.parametrize("source", IN_LOOP, ids=range(len(IN_LOOP)))
 def test_a_state_dependent_payload_passes_the_probe_and_is_stopped_in_the_loop(source: str) -> None:
-    report = probe(source, set(ENV), {"cost": (K,)}, ENV)
+    report = probe(source, set(ENV), {"cost": (K,)}, ENV, ProbeLimits(wall_s=60.0))
     program = CostProgram.compile(source, set(ENV))
     program.probed_s.update(report.seconds_per_call)
     assert program.bounded_call("cost", ENV, (K,)).shape == (K,)  # the probe's states: fast, as probed

@@ -157,8 +157,11 @@ def lift_end_done(tcp, touch, start_tcp):
     ez = tcp[..., 2] - {k["edge_lift_z_m"]}
     return logical_and(sqrt(ex ** 2 + ey ** 2 + ez ** 2) < 0.015, min(touch, axis=-1) > 1.0)''', k))
     plan.code.append(with_weights(hold_code("still_cost", w_yaw="30.0", seed=True), k))
-    plan.code.append(f'''def still_done({n}_vel, {n}_spin):
-    return logical_and(norm({n}_vel) < 0.015, {n}_spin < 0.2)''')
+    plan.code.append(f'''def still_done({n}_vel, {n}_spin, {n}_lo, touch):
+    """At rest in the hand, and lifted: the object's lowest point (a sagging end included) clear of the table,
+    both pads on it."""
+    held = logical_and({n}_lo[..., 2] > {k["clear_lift_m"]}, min(touch, axis=-1) > 0.5)
+    return logical_and(logical_and(norm({n}_vel) < 0.015, {n}_spin < 0.2), held)''')
     plan.stages += [
         StageSpec(name="reach", cost="over_end_cost", done="over_end_done", grip="open", noise_scale=0.35,
                   timeout_s=timeout(k, 4.0)),

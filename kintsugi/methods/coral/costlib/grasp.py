@@ -113,8 +113,10 @@ def descend_done(tcp, {n}_pos, start_{n}_lo, {n}_half, finger_length):
     return W_REACH * sqrt(ex ** 2 + ey ** 2 + ez ** 2) + 2.0 * W_REACH * lag + W_YAW * wrap_pi(yaw - start_yaw) ** 2 + W_SMOOTH * step_change
 
 
-def lift_done(touch, {n}_pos, start_{n}_pos):
-    return logical_and({n}_pos[..., 2] > start_{n}_pos[2] + {k["lift_m"] - 0.02}, min(touch, axis=-1) > 0.5)''', k))
+def lift_done(touch, {n}_pos, start_{n}_pos, {n}_lo):
+    """Lifted: the object's lowest point (its tracked pose and known shape) clear of the table, both pads on it."""
+    up = logical_and({n}_pos[..., 2] > start_{n}_pos[2] + {k["lift_m"] - 0.02}, {n}_lo[..., 2] > {k["clear_lift_m"]})
+    return logical_and(up, min(touch, axis=-1) > 0.5)''', k))
     plan.stages += [
         StageSpec(name="reach", cost="reach_cost", done="reach_done", grip=f"{n}_open", keep=f"{n}_aim",
                   timeout_s=timeout(k, 5.0)),

@@ -20,7 +20,7 @@ DEFAULT_KNOBS: dict[str, float] = {
     "tip_deg": 45.0, "pivot_deg": 125.0, "reach_over_m": 0.06, "fling_m_s": 0.3, "rest_m": 0.005, "flip_deg": 75.0, "reach_tol_m": 0.012, "force_tol_n": 0.4,
     "timeout_scale": 1.0, "hold_press_s": 2.0,
     "overhang_m": 0.09, "pinch_past_edge_m": 0.035, "under_edge_z_m": -0.012, "travel_z_m": 0.07,
-    "edge_lift_z_m": 0.28, "edge_touch_n": 5.0, "still_m_s": 0.03, "kept_m": 0.02,
+    "edge_lift_z_m": 0.28, "edge_touch_n": 5.0, "still_m_s": 0.03, "kept_m": 0.02, "clear_lift_m": 0.06,
 }
 """Weights (cost units per metre, newton, radian) and thresholds the skills are written with."""
 
