@@ -6,7 +6,7 @@ disturbances), and steps it one control period per `step(action)` through the st
 (`kintsugi.methods.policy.drivers`): no second copy of any physics or scoring.
 
 - observation: a `Dict` of the robot's sensors (and camera images, uint8, unless `images=False`), as
-  the family's driver documents them;
+  the family's driver documents them; tabletop `perceived=True` adds the robot's perceived object features;
 - action: the family's low-level command (`Box` with the driver's bounds);
 - reward: 1.0 on the step the task's scorer first judges the trial a success (sparse); with
   `reward="shaped"` also minus `shaped_scale` x the action's change since the last step (a smoothness
@@ -47,7 +47,7 @@ class KintsugiEnv(gym.Env):
     def __init__(self, task: str, condition: str | None = None, variant: str | None = None,
                  overrides: dict[str, Any] | None = None, images: bool = True, reward: str = "sparse",
                  shaped_scale: float = 0.01, max_seconds: float | None = None, score_every_s: float = 0.2,
-                 period_s: float = 2.0, render_mode: str | None = None) -> None:
+                 period_s: float = 2.0, perceived: bool = False, render_mode: str | None = None) -> None:
         load_builtins()
         self.task = TASKS.get(task).factory()
         self.task_name = task
@@ -64,6 +64,10 @@ class KintsugiEnv(gym.Env):
             raise KintsugiError(f"render_mode must be None or 'rgb_array', not {render_mode!r}")
         self.images, self.reward_kind, self.shaped_scale = images, reward, shaped_scale
         self.score_every_s, self.period_s, self.render_mode = score_every_s, period_s, render_mode
+        if perceived and self.task.system != "tabletop":
+            raise KintsugiError(f"perceived=True adds the tabletop robot's perceived object features; {task} is "
+                                f"a {self.task.system} task (its observation already has what its robot senses)")
+        self.perceived = perceived
         self.max_seconds = max_seconds if max_seconds is not None else _default_seconds(self.cfg)
         self.episode: Any = None
         self.driver: Driver | None = None
@@ -79,7 +83,7 @@ class KintsugiEnv(gym.Env):
         if self.episode is not None:
             self.episode.close()
         self.episode = self.task.episode(self.cfg, self.variant, self.condition, seed)
-        opts = {"period_s": self.period_s} if self.task.system == "tabletop" else {}
+        opts = {"period_s": self.period_s, "perceived": self.perceived} if self.task.system == "tabletop" else {}
         self.driver = driver_for(self.episode.robot, **opts)
         self.seed_used = seed
         self._succeeded = False

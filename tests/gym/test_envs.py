@@ -93,3 +93,16 @@ def test_time_limit_truncates_and_bad_options_are_one_line_errors() -> None:
         gym.make("kintsugi/PourSingle-v0", condition="earthquake")
     with pytest.raises(KintsugiError, match="reward must be"):
         gym.make("kintsugi/PegInsertion-v0", reward="dense")
+
+
+def test_perceived_features_are_an_option_of_the_tabletop_environment() -> None:
+    env = gym.make("kintsugi/PourSingle-v0", images=False, perceived=True).unwrapped
+    try:
+        _check(env)
+        obs, _ = env.reset(seed=2)
+        assert obs["bottle_visible"][0] == 1.0 and 0.0 < obs["bottle_centroid"][2] < 0.5
+        assert abs(np.linalg.norm(obs["bottle_axis"]) - 1.0) < 1e-6
+    finally:
+        env.close()
+    with pytest.raises(KintsugiError, match="perceived=True"):
+        gym.make("kintsugi/PegInsertion-v0", perceived=True)

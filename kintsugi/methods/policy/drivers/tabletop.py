@@ -6,7 +6,9 @@ value between is a partial closing travel, as a gentle grasp ramps it).
 
 Observation: per arm `<arm>_joint_pos` (6, rad), `<arm>_eef_pos` (3, m), `<arm>_eef_quat` (4, x y z w,
 hemisphere-continuous), `<arm>_gripper_opening` (1, m), `<arm>_pad_force` (1, N, the finger pads' normal
-force); with images, `image_top` and `image_front` (H, W, 3) uint8.
+force); with images, `image_top` and `image_front` (H, W, 3) uint8; with `perceived=True`, per object
+`<object>_centroid` (3, m), `<object>_axis` (3, unit) and `<object>_visible` (1: 1.0 seen, 0.0 not, then zeros)
+from the robot's own perception of its camera renders (the features the methods get).
 
 Disturbances that strike "during an atomic action" (drop, shift, knock) are told of action starts through
 the task's hook; a policy has no atomic actions, so the driver marks one every `period_s` of control
@@ -36,8 +38,10 @@ class TabletopDriver(Driver):
     action_names = ACTION_NAMES
     action_unit = "rad (joint targets), 0..1 (gripper closing command)"
 
-    def __init__(self, robot: Any, period_s: float = 2.0, schedule: list[ActionMark] | None = None) -> None:
+    def __init__(self, robot: Any, period_s: float = 2.0, schedule: list[ActionMark] | None = None,
+                 perceived: bool = False) -> None:
         super().__init__()
+        self.perceived = perceived
         self.robot = robot
         self.world = robot._world  # actuators and sensors only; ground truth stays with the scorer
         self.cfg = self.world.cfg
@@ -119,6 +123,11 @@ class TabletopDriver(Driver):
             out[f"{arm}_eef_quat"] = Feature((4,), -1.0, 1.0, "float64", "quaternion", ("qx", "qy", "qz", "qw"))
             out[f"{arm}_gripper_opening"] = Feature((1,), 0.0, 1.0, "float64", "m")
             out[f"{arm}_pad_force"] = Feature((1,), 0.0, np.inf, "float64", "N")
+        if self.perceived:
+            for name in self.robot.objects:
+                out[f"{name}_centroid"] = Feature((3,), -2.0, 2.0, "float64", "m", ("x", "y", "z"))
+                out[f"{name}_axis"] = Feature((3,), -1.0, 1.0, "float64", "unit", ("x", "y", "z"))
+                out[f"{name}_visible"] = Feature((1,), 0.0, 1.0, "float64", "flag")
         if images:
             c = self.cfg.cameras
             for cam in CAMERAS:
@@ -137,6 +146,12 @@ class TabletopDriver(Driver):
             obs[f"{arm}_eef_quat"] = self.continuous(arm, wxyz[[1, 2, 3, 0]], 3)
             obs[f"{arm}_gripper_opening"] = np.array([w.gripper_opening(arm)])
             obs[f"{arm}_pad_force"] = np.array([w.pad_contacts(arm)[1]])
+        if self.perceived:
+            for name, f in self.robot.features().items():
+                seen = f.visible and f.centroid is not None
+                obs[f"{name}_centroid"] = np.array(f.centroid if seen else (0.0, 0.0, 0.0))
+                obs[f"{name}_axis"] = np.array(f.axis if seen and f.axis is not None else (0.0, 0.0, 0.0))
+                obs[f"{name}_visible"] = np.array([1.0 if seen else 0.0])
         if images:
             for cam in CAMERAS:
                 obs[f"image_{cam}"] = w.render(cam)
