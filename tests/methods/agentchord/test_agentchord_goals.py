@@ -55,7 +55,10 @@ def test_rearrange_goal_plans_carry_turn_place_per_utensil() -> None:
     spoon = _lying("spoon", (0.4, -0.25), head_dx=1.0)  # already heading away
     goal = ["in_region(fork, beside_left(plate))", "in_region(spoon, beside_right(plate))", "flat(fork)",
             "flat(spoon)", "heading(fork, away)", "heading(spoon, away)", "released(fork)", "released(spoon)"]
-    reply = _compose("Use the left arm for the fork and the right arm for the spoon.", goal, [plate, fork, spoon])
+    said = ("Place the fork to the left of the plate and the spoon to the right of it, each lying flat along the "
+            "plate's side with its head pointing away from you. Use the left arm for the fork and the right arm "
+            "for the spoon.")
+    reply = _compose(said, goal, [plate, fork, spoon])
     ops = _ops(reply)
     assert "turn_heading(left, fork, away, beside_left(plate))" in ops
     assert not any(o.startswith("turn_heading(right, spoon") for o in ops)  # its head already points away
