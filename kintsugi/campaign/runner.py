@@ -6,7 +6,10 @@ command; every trial whose line reached the disk is skipped, every other one run
 
 from __future__ import annotations
 
+import contextlib
+import threading
 import time
+from collections.abc import Iterator
 from pathlib import Path
 
 from rich.console import Console
@@ -80,7 +83,8 @@ def run_campaign(
     lines = progress and not console.is_terminal
 
     started, resumed = time.monotonic(), len(records)
-    with store.appender() as appender, _progress(console, progress and not lines) as bar:
+    beat = _Heartbeat(console, len(specs), started, HEARTBEAT_S) if lines and todo else None
+    with store.appender() as appender, _progress(console, progress and not lines) as bar, beat or _nothing():
         task_id = bar.add_task(escape(cfg.task), total=len(specs), completed=len(records), ok=ok, err=err)
         for spec, record in runner.run(todo) if todo else ():
             record = _checked(spec, record)
@@ -94,7 +98,47 @@ def run_campaign(
                 eta = elapsed / (len(records) - resumed) * (len(specs) - len(records))
                 console.print(escape(progress_line(record, len(records), len(specs), ok, err, elapsed, eta)),
                               highlight=False)
+                if beat is not None:
+                    beat.done(len(records))
     return [records[s.key] for s in specs if s.key in records]
+
+
+HEARTBEAT_S = 10.0
+"""In a log, a line at least this often while trials run, so a long trial is not mistaken for a hang."""
+
+
+@contextlib.contextmanager
+def _nothing() -> Iterator[None]:
+    yield
+
+
+class _Heartbeat:
+    """A daemon thread that prints 'still running' when no trial has finished for `every_s` seconds."""
+
+    def __init__(self, console: Console, total: int, started: float, every_s: float) -> None:
+        self.console, self.total, self.started, self.every_s = console, total, started, every_s
+        self.count, self.last = 0, started
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._beat, daemon=True, name="campaign-heartbeat")
+
+    def __enter__(self) -> "_Heartbeat":
+        self.thread.start()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop.set()
+        self.thread.join(timeout=1.0)
+
+    def done(self, count: int) -> None:
+        self.count, self.last = count, time.monotonic()
+
+    def _beat(self) -> None:
+        while not self.stop.wait(self.every_s / 4):
+            now = time.monotonic()
+            if now - self.last >= self.every_s:
+                self.last = now
+                self.console.print(escape(f"{self.count}/{self.total} still running: "
+                                          f"[{_clock(now - self.started)} elapsed]"), highlight=False)
 
 
 def progress_line(record: TrialRecord, done: int, total: int, ok: int, err: int,

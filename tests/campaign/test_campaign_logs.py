@@ -26,3 +26,23 @@ def test_the_report_links_videos_relative_to_itself_and_names_the_commit(tmp_pat
     recs = [_rec(str(tmp_path / "videos" / "a.mp4")), _rec(str(tmp_path / "videos" / "gone.mp4")), _rec()]
     assert _videos(tmp_path, recs) == [("t/m/v/c/0", "videos/a.mp4")]
     assert machine_info()["commit"]
+
+
+def test_a_log_gets_a_heartbeat_while_a_trial_runs_and_none_after() -> None:
+    import io
+    import time
+
+    from rich.console import Console
+
+    from kintsugi.campaign.runner import _Heartbeat
+
+    out = io.StringIO()
+    console = Console(file=out, force_terminal=False, width=200)
+    with _Heartbeat(console, total=4, started=time.monotonic(), every_s=0.2) as beat:
+        time.sleep(0.5)  # a long trial: no record for more than the period
+        beat.done(1)
+        time.sleep(0.1)  # a trial just finished: no heartbeat yet
+        lines = out.getvalue().splitlines()
+    assert len(lines) >= 1 and all(line.startswith("0/4 still running: [0:00 elapsed]") for line in lines)
+    time.sleep(0.3)
+    assert out.getvalue().splitlines() == lines  # stopped with the campaign
