@@ -18,7 +18,7 @@ class Parser(Nouns):
 
     # --- instruction ----------------------------------------------------------------------------------
     def parse(self) -> list[Clause]:
-        clauses: list[Clause] = []
+        clauses: list[Clause] = self.clauses
         while self.i < len(self.t):
             tok = self.peek()
             if tok in ",.;:!" or tok in CONNECTIVES or self.eat("after", "that"):
@@ -199,8 +199,8 @@ class Parser(Nouns):
         if p == "(":
             raise self.fail("remarks in parentheses are not in the language")
         if p == "its":
-            raise self.fail("parts of an object ('its corners', 'its handle') are not in the language; "
-                            "name the object itself")
+            raise self.fail("parts of an object ('its corners', 'its handle') are not in the language (the "
+                            "action library grasps and places whole objects); name the object itself")
         return False
 
     def _orient(self, g: Group, how: str) -> bool:
@@ -244,4 +244,11 @@ class Parser(Nouns):
 
 
 def parse(text: str, scene: Scene) -> list[Clause]:
-    return Parser(text, scene).parse()
+    """Raises NotUnderstood at the first words outside the language, with the steps read before them
+    (`clauses`), so a refusal can also say what those steps would need."""
+    p = Parser(text, scene)
+    try:
+        return p.parse()
+    except NotUnderstood as exc:
+        exc.clauses = p.clauses
+        raise

@@ -16,6 +16,7 @@ class Nouns:
         self.i = 0
         self.mentions: list[str] = []
         self.last_main: list[str] = []
+        self.clauses: list = []
         self.current: list[str] = []
         self.lexicon = frozenset().union(*(th.words for th in scene.things)) if scene.things else frozenset()
 

@@ -285,4 +285,20 @@ class _Meaning:
 def read(text: str, scene: Scene, predicates: frozenset[str] | None = None) -> Reading:
     """The instruction's meaning in the scene; `predicates`: the domain's predicate names (a goal needing one
     the domain lacks is refused, naming it). Raises NotUnderstood."""
-    return _Meaning(scene, predicates).run(parse(text, scene))
+    try:
+        clauses = parse(text, scene)
+    except NotUnderstood as exc:
+        raise NotUnderstood(str(exc) + _needs(getattr(exc, "clauses", []), scene, predicates)) from None
+    return _Meaning(scene, predicates).run(clauses)
+
+
+def _needs(clauses: list[Clause], scene: Scene, predicates: frozenset[str] | None) -> str:
+    """What the steps read before a refusal would need that the action library lacks ("; and ...")."""
+    if not clauses or predicates is None:
+        return ""
+    try:
+        _Meaning(scene, predicates).run(clauses)
+    except NotUnderstood as exc:
+        if "the action library has no predicate" in str(exc):
+            return "; and " + str(exc)
+    return ""
