@@ -52,15 +52,19 @@ def instructed_ops(task: str, domain: Any, arms: list[str], objects: list[str], 
     that arm only (no instance that picks it up adds holding(other arm, it); a handover may pass it on), until
     it has handed the object over to the other arm: from then on only the taker picks it up again after a
     drop (the giver may not reach where it fell); an object to be held up must be lifted before any operator makes a fact that
-    names it as the target (carry over it, pour into it)."""
+    names it as the target (carry over it, pour into it); an object given to both arms is taken by both at once.
+    """
     from dataclasses import replace
 
     if reading is None:
         reading = reading_of(task, scene_of(objects, list(arms)))
     bound, up = {o: a for o, a in reading.bindings.items() if a in arms}, reading.held_up
     handovers = any(p.name == "handed_over" and len(p.params) == 3 for p in domain.predicates)
+    both = set(reading.both_arms)
     out = []
     for op in ground(domain, arms, objects, places):
+        if both and _one_arm_take(op, both):
+            continue
         other = _other_taker(op, bound) or _other_hand(op, bound)
         if other is not None and not handovers:
             continue
@@ -75,6 +79,15 @@ def instructed_ops(task: str, domain: Any, arms: list[str], objects: list[str], 
             op = replace(op, pre_pos=op.pre_pos | {("lifted", t) for t in targets})
         out.append(op)
     return out
+
+
+def _one_arm_take(op: Any, both: set[str]) -> bool:
+    """The operator takes from the table, with one arm alone, an object the instruction gives to both arms."""
+    takers: dict[str, int] = {}
+    for a in op.add:
+        if a[0] == "holding" and a[2] in both and ("released", a[2]) in op.pre_pos:
+            takers[a[2]] = takers.get(a[2], 0) + 1
+    return any(n == 1 for n in takers.values())
 
 
 def _other_taker(op: Any, bound: dict[str, str]) -> tuple[str, str] | None:

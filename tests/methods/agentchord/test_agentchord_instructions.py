@@ -34,3 +34,17 @@ def test_without_held_up_the_cup_stays_on_the_table() -> None:
     text = "Pour water from the bottle with the right arm into the cup, then put the bottle back upright."
     ops = list(embedded_compose(composer_request(task=text)).edge_operators.values())
     assert ops[0] == "grasp(right, bottle)" and not any("cup)" in o and o.startswith(("grasp", "lift")) for o in ops)
+
+
+def test_an_object_given_to_both_arms_is_never_taken_by_one() -> None:
+    from kintsugi.methods.agentchord.domain import TABLETOP_DOMAIN
+    from kintsugi.methods.agentchord.instruction import instructed_ops
+
+    def takes(text: str) -> set[str]:
+        ops = instructed_ops(text, TABLETOP_DOMAIN, ["left", "right"], ["bottle", "cup"])
+        return {o.label for o in ops if any(a[0] == "holding" and a[2] == "bottle" for a in o.add)
+                and ("released", "bottle") in o.pre_pos}
+
+    one = {"grasp(left, bottle)", "grasp(right, bottle)"}
+    assert one <= takes("Put the bottle on the table.")
+    assert not one & takes("Take the bottle with both arms and put it back.")
