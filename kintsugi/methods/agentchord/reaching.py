@@ -35,6 +35,7 @@ along swings it wide); farther out, the grasp only drags it back into reach."""
 PULL_GRASP_MARGIN_M = 0.012
 PULL_PRE_GRASP_M = 0.04
 PULL_M = 0.15
+SHORT_PRE_GRASP_M = 0.04
 COMFORT_M = 0.5
 """Distance from the arm's base (horizontal) a dragged object is brought towards."""
 PULL_LIFT_M = 0.015
@@ -93,7 +94,11 @@ def grasp_alternatives(call: dict, f: ObjectFeatures | None, base: np.ndarray) -
         return []
     c = np.asarray(f.centroid, float)
     radial = math.degrees(math.atan2(c[1] - base[1], c[0] - base[0]))
-    return [{**call, "yaw_deg": round((radial + turn + 180.0) % 360.0 - 180.0, 2)} for turn in YAW_TURNS_DEG]
+    out = [{**call, "yaw_deg": round((radial + turn + 180.0) % 360.0 - 180.0, 2)} for turn in YAW_TURNS_DEG]
+    if float(call.get("pre_grasp_offset", 0.08)) > SHORT_PRE_GRASP_M:  # close to the base, a long approach
+        short = {**call, "pre_grasp_offset": SHORT_PRE_GRASP_M}  # backs the hand out of the workspace
+        out += [short] + [{**a, "pre_grasp_offset": SHORT_PRE_GRASP_M} for a in out]
+    return out
 
 
 def pull_vector(f: ObjectFeatures, base: np.ndarray) -> np.ndarray:
