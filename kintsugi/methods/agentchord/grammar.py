@@ -61,6 +61,9 @@ class Parser(Nouns):
         verb = VERBS[self.peek()]
         word = self.peek()
         self.i += 1
+        kept = self.kept(word, start)
+        if kept is not None:
+            return kept
         c = Clause(verb, word)
         if verb == "use":
             self.uses(c)
@@ -73,6 +76,23 @@ class Parser(Nouns):
                 c.groups.append(self.group(verb, word))
         c.words = " ".join(self.t[start:self.i])
         return c
+
+    def kept(self, word: str, start: int) -> Clause | None:
+        """`leave X where it is` / `leave X alone` (not moved) and `keep X upright` (not tipped)."""
+        if word not in ("leave", "keep"):
+            return None
+        save = self.i
+        objs = self.noun_phrase(coordinate=True)
+        what = None
+        if word == "leave" and (self.eat("where", "it", "is") or self.eat("where", "they", "are")
+                                or self.eat("in", "place") or self.eat("alone") or self.eat("where", "it", "stands")):
+            what = "moved"
+        elif word == "keep" and (self.eat("upright") or self.eat("standing")):
+            what = "tipped"
+        if what is None or not objs:
+            self.i, self.mentions = save, self.mentions[:len(self.mentions) - len(objs)]
+            return None
+        return Clause("not", " ".join(self.t[start:self.i]), negated=(what, objs))
 
     def uses(self, c: Clause) -> None:
         while True:
@@ -127,6 +147,9 @@ class Parser(Nouns):
             if p in ("up", "down", "back", "over", "half"):
                 self.i += 1
             g.particles.add(p if p != "in" else "half")
+            return True
+        if self.eat("raised") or self.eat("lifted") or self.eat("in", "the", "air"):
+            g.particles.add("up")
             return True
         if self.eat("upright") or self.eat("standing", "up") or self.eat("standing") or self.eat("on", "its", "base"):
             return self._orient(g, "upright")

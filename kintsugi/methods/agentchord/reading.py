@@ -119,6 +119,8 @@ class _Meaning:
     def do_take(self, g: Group, c: Clause) -> None:
         if g.place is not None or g.orient is not None:
             raise NotUnderstood(f"not understood: {c.words!r}: taking an object says where it goes with 'put'")
+        if c.words.split()[0] == "keep" and "up" not in g.particles:
+            raise NotUnderstood(f"not understood: {c.words!r}: 'keep' takes up, raised, upright, or where it is")
         for o in g.objects:
             st = self.of(o)
             st.held, st.released = True, False
