@@ -42,8 +42,10 @@ def test_a_lying_object_is_grasped_off_centre_towards_the_base_first() -> None:
 
 def test_a_standing_object_is_approached_from_other_sides() -> None:
     call = {"action": "grasp", "arm": "right", "obj": "bottle"}
-    yaws = [a["yaw_deg"] for a in grasp_alternatives(call, _standing(0.4, -0.2), BASE)]
-    assert len(set(yaws)) == len(yaws) >= 4 and all(-180.0 <= y <= 180.0 for y in yaws)
+    alts = grasp_alternatives(call, _standing(0.4, -0.2), BASE)
+    ways = [(a.get("yaw_deg"), a.get("pre_grasp_offset")) for a in alts]
+    assert len(set(ways)) == len(ways) >= 4 and all(y is None or -180.0 <= y <= 180.0 for y, _ in ways)
+    assert any(a.get("pre_grasp_offset", 0.08) < 0.08 for a in alts)  # a shorter approach near the base
     assert grasp_alternatives({**call, "yaw_deg": 10.0}, _standing(0.4, -0.2), BASE) == []  # as asked, no guess
 
 
