@@ -59,3 +59,20 @@ def test_inner_monologue_trial_over_the_openai_protocol(fake_openai: FakeOpenAIS
     composer = rec.transcript[0]
     assert composer["reply"]["goal"] and not composer["request"].get("goal")  # the instruction only: no goal in
     assert sorted(composer["reply"]["goal"]) == sorted(embedded.transcript[0]["reply"]["goal"])
+
+
+def test_a_models_goal_is_checked_like_the_embedded_one(fake_openai: FakeOpenAIServer) -> None:
+    """The composer's reply carries the goal a model read from the instruction; one naming an object the scene
+    does not have, or a predicate the domain does not, gets a repair round naming it."""
+    from kintsugi.methods.agentchord.composer import ask_compose, embedded_compose
+    from tests.taskgraph_fixtures import composer_request, tabletop_vocab
+
+    request = composer_request().model_copy(update={"goal": []})
+    good = json.loads(embedded_compose(request).model_dump_json())
+    reasoner = make_reasoner(_openai(fake_openai))
+    for bad, named in ((["poured(bottle, glass)"], "glass"), (["spilled(bottle)"], "spilled"), ([], "no `goal`")):
+        fake_openai.requests.clear()
+        fake_openai.push(content({**good, "goal": bad}), content(good))
+        _, reply = ask_compose(reasoner, request, tabletop_vocab())
+        assert sorted(reply.goal) == sorted(good["goal"]) and len(fake_openai.requests) == 2
+        assert named in json.dumps(fake_openai.requests[1]["messages"])
