@@ -210,8 +210,9 @@ def explain(
     path: Annotated[Path, typer.Argument(help="a trial record (.json) or a campaign's results.jsonl")],
     key: Annotated[Optional[str], typer.Option(
         help="trial key when PATH holds many records: task/method/variant/condition/seed (or with __)")] = None,
-    full: Annotated[bool, typer.Option("--full", help="also print every reasoning call's request and reply, "
-                                       "and the figures' long texts (cost code)")] = False,
+    full: Annotated[bool, typer.Option("--full", "--verbose", help="also print every reasoning call's request "
+                                       "and reply, and the figures' long texts (cost code)")] = False,
+    as_json: Annotated[bool, typer.Option("--json", help="print the raw record as JSON instead")] = False,
 ) -> None:
     """Print a trial as one timeline: skills with their outcome, events and reasoning calls in sim-time
     order, then its figures and its outcome."""
@@ -222,7 +223,10 @@ def explain(
     except KintsugiError as exc:
         _fail(exc)
         return
-    explain_record(rec, console, full=full)
+    if as_json:
+        console.print_json(rec.model_dump_json())
+    else:
+        explain_record(rec, console, full=full)
 
 
 @app.command()
@@ -277,8 +281,9 @@ def graph(
 @app.command()
 def export(
     campaign: Annotated[Path, typer.Argument(help="campaign directory (campaign.json + results.jsonl)")],
-    format_: Annotated[Literal["lerobot", "hdf5", "lerobot-v2.1"], typer.Option(
-        "--format", help="lerobot (v3.0 layout, any system), hdf5 (robomimic layout) or lerobot-v2.1 (tabletop)")],
+    format_: Annotated[Literal["lerobot", "hdf5", "lerobot-v2.1", "trajectory"], typer.Option(
+        "--format", help="lerobot (v3.0 layout, any system), hdf5 (robomimic layout), lerobot-v2.1 (tabletop) "
+                         "or trajectory (per-trial .npz for the replay policy)")],
     out: Annotated[Path, typer.Option(help="new (or empty) directory to write the dataset into")],
     trials: Annotated[Optional[str], typer.Option(help="which trials, e.g. 'method=agentchord,condition=drop,"
                                                   "seed=0-9,recovered' (fields task method variant condition key "

@@ -1,7 +1,7 @@
 """Trajectory export for policy learning (AgentChord IV-E): chosen trials of a campaign of any system (peg,
 tabletop, contact), re-run with a recorder, written as a LeRobot v3.0 dataset (`lerobot`), a robomimic HDF5
 file (`hdf5`) or, for tabletop campaigns, LeRobot's older v2.1 layout (`lerobot-v2.1`), with nominal/recovery
-segment labels.
+segment labels; or, as `trajectory`, each trial's command at every control period for the replay policy.
 
 `export_campaign` is what `kintsugi export` calls. Each chosen trial is re-run from its recorded spec
 (trials are deterministic per seed) and checked against its record (`replay.compare`); a trial that does
@@ -20,8 +20,8 @@ from kintsugi.core.errors import ConfigError, KintsugiError
 from kintsugi.export.select import parse_filter
 from kintsugi.core.record import TrialSpec
 
-Format = Literal["lerobot", "hdf5", "lerobot-v2.1"]
-FORMATS = ("hdf5", "lerobot", "lerobot-v2.1")
+Format = Literal["lerobot", "hdf5", "lerobot-v2.1", "trajectory"]
+FORMATS = ("hdf5", "lerobot", "lerobot-v2.1", "trajectory")
 MANIFEST = "export.json"
 
 
@@ -100,6 +100,17 @@ def export_campaign(campaign_dir: str | Path, fmt: Format, out: str | Path, tria
               "filter": filt.text,
               "config": cfg.model_dump(mode="json")}
     report = ExportReport(out=out, path=None)
+    if fmt == "trajectory":
+        from kintsugi.export.trajectories import export_trajectories
+
+        specs = [(TrialSpec(task=r.task, method=r.method, variant=r.variant, condition=r.condition, seed=r.seed,
+                            overrides=cfg.overrides, reasoner=cfg.reasoner), r) for r in chosen]
+        export_trajectories(specs, out, report, Exported, on_trial)
+        if not report.exported:
+            raise KintsugiError("no trial could be exported (" + "; ".join(f"{k}: {w}" for k, w in report.refused) + ")")
+        report.path = out
+        _manifest(out, fmt, fps, source, report)
+        return report
     writer = None
     try:
         for r in chosen:
@@ -131,11 +142,15 @@ def export_campaign(campaign_dir: str | Path, fmt: Format, out: str | Path, tria
         reasons = "; ".join(f"{k}: {why}" for k, why in report.refused)
         raise KintsugiError(f"no trial could be exported ({reasons})")
     report.path = writer.close()
+    _manifest(out, fmt, fps, source, report)
+    return report
+
+
+def _manifest(out: Path, fmt: str, fps: float, source: dict, report: ExportReport) -> None:
     manifest = {"kintsugi_version": kintsugi.__version__, "format": fmt, "fps": fps, **source,
                 "exported": [vars(e) for e in report.exported],
                 "refused": [{"key": k, "reason": why} for k, why in report.refused]}
     (out / MANIFEST).write_text(json.dumps(manifest, indent=2) + "\n")
-    return report
 
 
 def _dependencies(fmt: Format) -> None:
@@ -144,7 +159,7 @@ def _dependencies(fmt: Format) -> None:
         from kintsugi.export.hdf5 import _h5py
 
         _h5py()
-    else:
+    elif fmt != "trajectory":
         from kintsugi.export.lerobot import _pyarrow
 
         _pyarrow()
