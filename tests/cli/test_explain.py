@@ -277,3 +277,21 @@ def test_a_failed_call_sits_before_the_error_it_caused() -> None:
     order = positions(render(rec), "4.00 s skill align -> reached", "4.00 s reason judge (embedded, 0.010 s): error:",
                       "4.00 s event error: ReasoningError")
     assert order == sorted(order)
+
+
+def test_json_prints_the_raw_record_and_verbose_is_full(tmp_path: Path) -> None:
+    from typer.testing import CliRunner
+
+    from kintsugi.cli import app
+    from kintsugi.core.record import TrialRecord
+
+    rec = TrialRecord(key="t/m/v/c/0", task="t", method="m", variant="v", condition="c", seed=0, success=True,
+                      transcript=[{"role": "judge", "backend": "embedded", "request": {"q": "secret-request"},
+                                   "reply": {"success": True}, "latency_s": 0.01}])
+    path = tmp_path / "r.json"
+    path.write_text(rec.model_dump_json())
+    raw = CliRunner().invoke(app, ["explain", str(path), "--json"])
+    assert TrialRecord.model_validate_json(raw.output) == rec
+    plain = CliRunner().invoke(app, ["explain", str(path)]).output
+    verbose = CliRunner().invoke(app, ["explain", str(path), "--verbose"]).output
+    assert "secret-request" not in plain and "secret-request" in verbose
