@@ -7,7 +7,7 @@
 (b) Physics steps per wall-second while the CF skills run (`execute_skill`, rendering
     excluded), against a tight `mujoco.mj_step` loop on the same MjModel/MjData replaying the
     same base trajectory (same contacts, same number of steps; the replay must end in the same state, bit for bit).
-Prints a Markdown table for the README; targets: <= 1.5 s per trial, overhead <= 2x raw.
+Prints Markdown tables (`--page docs/benchmarks-peg.md` writes them into the benchmark page); targets: <= 1.5 s per trial, overhead <= 2x raw.
 """
 
 from __future__ import annotations
@@ -130,6 +130,7 @@ def main() -> None:
     ap.add_argument("--trials", type=int, default=20, help="baseline trials for the wall-time figure")
     ap.add_argument("--seed", type=int, default=0, help="first trial seed")
     ap.add_argument("--repeats", type=int, default=5, help="repeats of the step-rate run (best is kept)")
+    ap.add_argument("--page", help="also write the tables into this benchmark page (e.g. docs/benchmarks-peg.md)")
     args = ap.parse_args()
     load_builtins()
 
@@ -144,31 +145,45 @@ def main() -> None:
     raw_rate = sum(r["steps"] for r in rates) / sum(r["raw_s"] for r in rates)
     overhead = raw_rate / fw_rate
 
-    print(f"\n{args.trials} baseline trials (round/square/rectangle, condition all, seeds {args.seed}.."
+    lines: list[str] = []
+
+    def out(text: str = "") -> None:
+        print(text)
+        lines.extend(text.split("\n"))
+
+    out(f"\n{args.trials} baseline trials (round/square/rectangle, condition all, seeds {args.seed}.."
           f"{args.seed + args.trials - 1}): {successes}/{args.trials} ground-truth successes, "
           f"{statistics.mean(steps):.0f} physics steps per trial on average "
           f"({statistics.mean(steps) * PegTaskConfig().sim.timestep_s:.2f} s simulated)\n")
-    print("| figure | value | target | verdict |")
-    print("|---|---|---|---|")
-    print(f"| trial wall time, median | {med:.3f} s | <= {TARGET_TRIAL_S} s | "
+    out("| figure | value | target | verdict |")
+    out("|---|---|---|---|")
+    out(f"| trial wall time, median | {med:.3f} s | <= {TARGET_TRIAL_S} s | "
           f"{'ok' if med <= TARGET_TRIAL_S else 'MISSED'} |")
-    print(f"| trial wall time, p90 | {p90:.3f} s | <= {TARGET_TRIAL_S} s | "
+    out(f"| trial wall time, p90 | {p90:.3f} s | <= {TARGET_TRIAL_S} s | "
           f"{'ok' if p90 <= TARGET_TRIAL_S else 'MISSED'} |")
-    print(f"| trial wall time, max | {max(walls):.3f} s | | |")
-    print(f"| raw mj_step rate | {raw_rate:,.0f} steps/s | | |")
-    print(f"| framework step rate (skills, no render) | {fw_rate:,.0f} steps/s | | |")
-    print(f"| framework overhead (raw / framework) | {overhead:.2f}x | <= {TARGET_OVERHEAD}x | "
+    out(f"| trial wall time, max | {max(walls):.3f} s | | |")
+    out(f"| raw mj_step rate | {raw_rate:,.0f} steps/s | | |")
+    out(f"| framework step rate (skills, no render) | {fw_rate:,.0f} steps/s | | |")
+    out(f"| framework overhead (raw / framework) | {overhead:.2f}x | <= {TARGET_OVERHEAD}x | "
           f"{'ok' if overhead <= TARGET_OVERHEAD else 'MISSED'} |")
-    print(f"| real-time factor (framework, no render) | {fw_rate * PegTaskConfig().sim.timestep_s:.1f}x | | |")
-    print("\nper shape (one run of the taught skills under condition all, seed "
+    out(f"| real-time factor (framework, no render) | {fw_rate * PegTaskConfig().sim.timestep_s:.1f}x | | |")
+    out("\nper shape (one run of the taught skills under condition all, seed "
           f"{args.seed}, best of {args.repeats}):\n")
-    print("| shape | steps | framework s | raw s | render s (5 frames) | overhead |")
-    print("|---|---|---|---|---|---|")
+    out("| shape | steps | framework s | raw s | render s (5 frames) | overhead |")
+    out("|---|---|---|---|---|---|")
     for shape, r in zip(SHAPES, rates):
-        print(f"| {shape} | {r['steps']} | {r['framework_s']:.4f} | {r['raw_s']:.4f} | {r['render_s']:.4f} | "
+        out(f"| {shape} | {r['steps']} | {r['framework_s']:.4f} | {r['raw_s']:.4f} | {r['render_s']:.4f} | "
               f"{r['framework_s'] / r['raw_s']:.2f}x |")
     print()
     print_tables(tables_for("peg-insertion", records))
+    if args.page:
+        try:
+            from bench.pages import Block, command_line, write_block
+        except ModuleNotFoundError:  # run as a script: bench/ is on the path
+            from pages import Block, command_line, write_block
+
+        print(f"page: {write_block(args.page, Block('bench_peg', command_line(), lines))}")
+
 
 
 if __name__ == "__main__":

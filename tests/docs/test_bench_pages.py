@@ -1,0 +1,51 @@
+"""Benchmark pages are written by the bench scripts: each script owns a marked block of its page, with the
+command, date, commit and machine, and the page's hand-written text stays."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from bench.pages import Block, campaign_tables, main, write_block
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+def test_a_block_is_appended_then_replaced_and_the_text_around_it_stays(tmp_path: Path) -> None:
+    page = tmp_path / "b.md"
+    page.write_text("# Bench\n\nHand-written notes.\n")
+    write_block(page, Block("t", "bench/t.py --run", ["| a | b |", "|---|---|", "| 1 | 2 |"]))
+    write_block(page, Block("other", "bench/o.py", ["x"]))
+    write_block(page, Block("t", "bench/t.py --run", ["| a | b |", "|---|---|", "| 3 | 4 |"]))
+    text = page.read_text()
+    assert text.startswith("# Bench\n\nHand-written notes.\n") and text.count("<!-- begin: t -->") == 1
+    assert "| 3 | 4 |" in text and "| 1 | 2 |" not in text and "<!-- begin: other -->" in text
+    assert "Written by `bench/t.py --run` on " in text and "commit " in text and "CPUs" in text
+    assert write_block(tmp_path / "new.md", Block("n", "c", ["y"]), title="New").read_text().startswith("# New")
+
+
+def test_campaign_tables_go_into_a_page(tmp_path: Path) -> None:
+    from kintsugi.campaign.plan import build_config
+    from kintsugi.campaign.runner import run_campaign
+
+    cfg = build_config(task="peg-insertion", methods=["baseline"], variants=["round"], conditions=["none"], trials=2)
+    run_campaign(cfg, tmp_path / "c", executor="inline", progress=False)
+    lines = campaign_tables(tmp_path / "c")
+    assert any(line.startswith("| ") for line in lines) and "2 recorded" in lines[0]
+    assert main([str(tmp_path / "p.md"), "peg", str(tmp_path / "c")]) == 0
+    assert "<!-- begin: peg -->" in (tmp_path / "p.md").read_text()
+    assert main([]) == 2
+
+
+@pytest.mark.slow
+def test_bench_peg_writes_its_page(tmp_path: Path) -> None:
+    page = tmp_path / "benchmarks-peg.md"
+    res = subprocess.run([sys.executable, "bench/bench_peg.py", "--trials", "2", "--repeats", "1", "--page", str(page)],
+                         cwd=ROOT, capture_output=True, text=True, timeout=600)
+    assert res.returncode == 0, res.stderr[-2000:]
+    text = page.read_text()
+    assert "<!-- begin: bench_peg -->" in text and "| framework overhead (raw / framework) |" in text
+    assert "Written by `.venv/bin/python bench/bench_peg.py --trials 2 --repeats 1 --page" in text
