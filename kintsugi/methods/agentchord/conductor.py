@@ -13,7 +13,10 @@ Two sampling rates, by what a monitor reads:
   perception after every atomic action (a sub-goal sample; one violated sample meets their window), since a
   render per control step would cost far more than the step itself.
 A recovery's chain runs to its merge node; the failed edge's monitors are read once more there (a recovery
-that did not hold is run again, up to `max_recoveries`), and nominal execution continues. Recovery latency is
+that did not hold is run again; after MERGE_FAILS such failures on one edge the conductor falls back to re-planning
+from the current observation, at most `max_replans` times), and nominal execution continues. An action the arm
+cannot carry out is tried other ways (`Reaching`), else the trial ends as a recorded failure; a pour sub-goal is
+judged from perception (`Pouring`). Recovery latency is
 measured in control steps from the firing to the recovery's first command (`Metrics.recovery_latency_steps`).
 """
 
