@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from kintsugi.core.config import StrictModel
-from kintsugi.worlds.tabletop.config import TabletopConfig
+from kintsugi.worlds.tabletop.config import Region, TabletopConfig
 from kintsugi.worlds.tabletop.objects import TRAY_WALL, shape_of
 from kintsugi.worlds.tabletop.planning import Planner
 from kintsugi.worlds.tabletop.spec import TaskSpec, at_rest, held, in_region, on_table, region_center, upright
@@ -121,6 +121,7 @@ SPEC = TaskSpec(
     script=script,
     scorer=CoffeeScorer,
     targets=("tray_forward",),
+    regions={"tray_forward": Region(center_m=FORWARD, half_m=(0.03, 0.03))},
     shift=("tray", (0, 2)),
     knock=("capsule", (0, 0)),
 )

@@ -254,13 +254,9 @@ class ScoringSection(StrictModel):
 class TabletopConfig(StrictModel):
     robot: RobotSection = RobotSection()
     objects: ObjectsSection = ObjectsSection()
-    targets: dict[str, Region] = {
-        "fork": Region(center_m=(0.0, 0.18), half_m=(0.04, 0.025), relative_to="plate"),
-        "spoon": Region(center_m=(0.0, -0.18), half_m=(0.04, 0.025), relative_to="plate"),
-        "block": Region(center_m=(0.40, -0.25), half_m=(0.035, 0.035)),
-        "tray_forward": Region(center_m=(0.56, 0.0), half_m=(0.03, 0.03)),
-    }
-    """Where things must end up; a region constrains the object's centre (e.g. the tray's centre)."""
+    targets: dict[str, Region] = {}
+    """Where things must end up; a region constrains the object's centre (e.g. the tray's centre). Each task
+    declares its own (`TaskSpec.regions`), which become this section's defaults in the task's config."""
     table: TableSection = TableSection()
     sim: SimSection = SimSection()
     motion: MotionSection = MotionSection()
@@ -268,6 +264,15 @@ class TabletopConfig(StrictModel):
     disturbance: DisturbanceSection = DisturbanceSection()
     perception: PerceptionSection = PerceptionSection()
     scoring: ScoringSection = ScoringSection()
+
+    @model_validator(mode="after")
+    def _regions_beside_objects(self) -> "TabletopConfig":
+        known = type(self.objects).model_fields
+        for name, r in self.targets.items():
+            if r.relative_to is not None and r.relative_to not in known:
+                raise ValueError(f"targets.{name}.relative_to is {r.relative_to!r}, not an object; objects: "
+                                 f"{', '.join(known)}")
+        return self
 
 
 ARMS = ("left", "right")

@@ -20,7 +20,7 @@ import numpy as np
 from scipy.spatial.transform import Rotation
 
 from kintsugi.core.config import StrictModel
-from kintsugi.worlds.tabletop.config import TabletopConfig
+from kintsugi.worlds.tabletop.config import Region, TabletopConfig
 from kintsugi.worlds.tabletop.objects import shape_of
 from kintsugi.worlds.tabletop.spec import TaskSpec, at_rest, held, in_region, region_center
 from kintsugi.worlds.tabletop.world import GroundTruth, TabletopWorld
@@ -145,5 +145,6 @@ SPEC = TaskSpec(
     script=script,
     scorer=HandoverScorer,
     targets=("block",),
+    regions={"block": Region(center_m=REGION, half_m=(0.035, 0.035))},
     shift=("block", (0, 0)),
 )

@@ -15,7 +15,7 @@ import numpy as np
 
 from kintsugi.core.config import StrictModel
 from kintsugi.perception.features import ObjectFeatures
-from kintsugi.worlds.tabletop.config import TabletopConfig
+from kintsugi.worlds.tabletop.config import Region, TabletopConfig
 from kintsugi.worlds.tabletop.objects import shape_of
 from kintsugi.worlds.tabletop.spec import TaskSpec, at_rest, held, in_region, region_center, rest_level
 from kintsugi.worlds.tabletop.world import TabletopWorld
@@ -119,5 +119,7 @@ SPEC = TaskSpec(
     script=script,
     scorer=RearrangeScorer,
     targets=("fork", "spoon"),
+    regions={"fork": Region(center_m=(0.0, 0.18), half_m=(0.04, 0.025), relative_to="plate"),
+             "spoon": Region(center_m=(0.0, -0.18), half_m=(0.04, 0.025), relative_to="plate")},
     shift=("plate", (0, 2)),
 )
