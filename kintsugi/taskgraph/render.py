@@ -240,7 +240,7 @@ def _details(graph: TaskGraph, key: str) -> str:
 
 _PAGE = """<!doctype html><html><head><meta charset="utf-8"><title>{title}</title><style>
 body{{margin:0;font-family:system-ui,sans-serif}}header{{padding:.5em 1em;background:#f3f3f3}}
-svg{{width:100vw;height:calc(100vh - 3em);cursor:grab;display:block}}text{{font:{font}pt monospace}}
+svg{{width:100vw;height:calc(100vh - 3em);cursor:grab;display:block}}text{{font-size:{font}px;font-family:"DejaVu Sans Mono",monospace}}
 g.box:hover rect{{stroke-width:3}}</style></head><body><header><b>{title}</b> &mdash; scroll to zoom, drag to
 pan, hover a box for its details. <span style="color:{nom}">&#9632; nominal</span>
 <span style="color:{rec}">&#9632; recovery</span></header>
