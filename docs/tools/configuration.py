@@ -26,8 +26,7 @@ def _rows(model: type[BaseModel], prefix: str, value: Any) -> list[tuple[str, st
         if isinstance(current, BaseModel):
             rows += _rows(type(current), key + ".", current)
             continue
-        default = json.dumps(current if not isinstance(current, BaseModel) else current.model_dump(mode="json"),
-                             default=str)
+        default = json.dumps(value.model_dump(mode="json")[name], default=str)
         text = (field.description or "").replace("\n", " ").replace("|", "\\|")
         rows.append((key, default.replace("|", "\\|"), text))
         del sub
