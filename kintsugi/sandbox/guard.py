@@ -29,7 +29,7 @@ class LoopBound:
     """...and more than this is a runaway (a loaded machine's jitter stays far below)."""
     budget_s: float = 0.5
     """No call may use more CPU time than this, whatever its probe measured (the loop replans at 10 Hz)."""
-    wall_s: float = 0.9
+    wall_s: float = 0.75
     """Nor take longer than this on the clock: a runaway is stopped within a second however loaded the machine."""
 
     def limit(self, probed_s: float | None) -> float:

@@ -51,3 +51,7 @@ class CoralFigures(Figures):
     memory_beliefs: dict[str, dict[str, float]] | None = None
     """The beliefs carried over from the remembered episode."""
     attempts: list[CoralAttempt] = []
+    time_breakdown_wall_s: dict[str, float] = {}
+    """Wall seconds of the trial by where they went: planning (MPPI iterations), physics (the robot acting: the
+    simulation, its sensors, the inner-rate checks), sysid, reasoning (the roles' replies with their checks and
+    probes), other (varies between equal trials)."""

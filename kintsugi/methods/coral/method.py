@@ -20,13 +20,16 @@ from __future__ import annotations
 
 import json
 import math
+import time
+from contextlib import contextmanager
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 
 from kintsugi.core.errors import KintsugiError, ReasoningError
 from kintsugi.core.log import TrialLog
+from kintsugi.methods.coral.beliefs import dump, episode_notes, rescale, stressed, transfer
 from kintsugi.methods.coral.figures import CoralFigures
 
 
@@ -71,6 +74,9 @@ class Coral:
         self.info: dict[str, Any] = {"variant": variant.name}
         self._now = 0.0
         self._seed = 0
+        self.clock = {"planning": 0.0, "physics": 0.0, "sysid": 0.0, "reasoning": 0.0}
+        """Wall seconds by where they went: MPPI iterations, the robot acting (physics, sensors, inner-rate checks),
+        system identification, the roles (priors, formulation, adaptation: reply, checks and probes)."""
 
     # --- building the requests --------------------------------------------------------------------------------
     def scene_request(self, obs: Any, priors: dict[str, Any]) -> Any:
@@ -104,11 +110,22 @@ class Coral:
         from kintsugi.reasoning.base import RecordingReasoner
 
         reasoner = RecordingReasoner(make_reasoner(self.ctx.reasoner), records=[])
+        t0 = time.perf_counter()
         try:
             return self._run(robot, log, reasoner)
         finally:
             log.transcript.extend(r.model_dump(mode="json") for r in reasoner.records)
-            log.figures(CoralFigures(**self.info, attempts=self.attempts))
+            spent = {k: round(v, 3) for k, v in self.clock.items()}
+            spent["other"] = round(max(0.0, time.perf_counter() - t0 - sum(self.clock.values())), 3)
+            log.figures(CoralFigures(**self.info, attempts=self.attempts, time_breakdown_wall_s=spent))
+
+    @contextmanager
+    def _timed(self, where: str) -> Iterator[None]:
+        t0 = time.perf_counter()
+        try:
+            yield
+        finally:
+            self.clock[where] += time.perf_counter() - t0
 
     def _steps(self) -> tuple[int, int]:
         c = self.ctx.cfg.control
@@ -128,7 +145,8 @@ class Coral:
         self._seed = observation_seed(obs)
         views = object_views(ctx.known)
         # No camera image: the contact robot has no image API yet, so the roles get labels, sizes and poses only.
-        priors, notes = ask_priors(reasoner, PriorsRequest(task=ctx.task_text, objects=views))
+        with self._timed("reasoning"):
+            priors, notes = ask_priors(reasoner, PriorsRequest(task=ctx.task_text, objects=views))
         beliefs, stress = stressed(dict(priors.objects), cfg.coral)
         if stress:
             log.event(obs.t, "priors", stress)
@@ -142,7 +160,8 @@ class Coral:
         if memory is not None:
             plan, program, beliefs = self._recall(memory, req, beliefs, samples, steps, log, obs.t)
         if plan is None:
-            plan, program, notes = ask_formulation(reasoner, req, samples, steps, probe_limits())
+            with self._timed("reasoning"):
+                plan, program, notes = ask_formulation(reasoner, req, samples, steps, probe_limits())
             self.info["plan_from"] = "formulation"
             if notes:
                 log.event(obs.t, "formulation", "; ".join(notes))
@@ -155,11 +174,15 @@ class Coral:
                 robot.restart()
                 log.event(robot.sim_time, "restart", f"attempt {attempt + 1} of {attempts}")
             robot.new_log()
-            record: dict[str, Any] = {"attempt": attempt + 1, "beliefs_before": _dump(beliefs),
+            record: dict[str, Any] = {"attempt": attempt + 1, "beliefs_before": dump(beliefs),
                                       "source": plan.source, "stages": [s.model_dump() for s in plan.stages],
                                       "regions": [r.model_dump() for r in plan.regions], "knobs": dict(plan.knobs)}
             self.attempts.append(record)
+            t_attempt = time.perf_counter()
             result, trace, timing, error = self._attempt(robot, log, plan, program, planning, attempt)
+            planned = float(np.sum(trace.iteration_s)) if trace else 0.0
+            self.clock["planning"] += planned
+            self.clock["physics"] += max(0.0, time.perf_counter() - t_attempt - planned)
             record.update(reached=bool(result is not None and result.reached), cost_error=error,
                           code_ms_per_step=round(1000 * timing.seconds / max(1, timing.calls), 3),
                           mppi_ms_per_step=round(1000 * float(np.mean(trace.iteration_s)), 2) if trace and trace.iteration_s else None)
@@ -175,10 +198,12 @@ class Coral:
             if fitter is None:
                 fitter = self._fitter(planning)
             self._now = robot.sim_time
-            sysid = self._sysid(fitter, exec_log, beliefs, planning, log)
+            with self._timed("sysid"):
+                sysid = self._sysid(fitter, exec_log, beliefs, planning, log)
             history = self._history(attempt, result, trace, exec_log, error)
-            beliefs, plan, program = self._adapt(reasoner, req, beliefs, plan, program, history, sysid, planning,
-                                                 samples, steps, log, record)
+            with self._timed("reasoning"):
+                beliefs, plan, program = self._adapt(reasoner, req, beliefs, plan, program, history, sysid, planning,
+                                                     samples, steps, log, record)
         return False
 
     def _attempt(self, robot: Any, log: TrialLog, plan: Any, program: Any, planning: Any, attempt: int):  # noqa: ANN202
@@ -277,7 +302,7 @@ class Coral:
             return beliefs, plan, program
         new_beliefs = reply.beliefs if reply.beliefs is not None else beliefs
         planning.set_beliefs({k: Physics(mass_kg=v.mass_kg, friction=v.friction) for k, v in new_beliefs.items()})
-        record.update(adaptation=reply.diagnosis, adaptation_notes=notes, beliefs_after=_dump(new_beliefs),
+        record.update(adaptation=reply.diagnosis, adaptation_notes=notes, beliefs_after=dump(new_beliefs),
                       code_changed=new_program is not None)
         log.event(self._now, "adapt", reply.diagnosis[:300])
         return new_beliefs, new_plan, new_program or program
@@ -299,24 +324,24 @@ class Coral:
 
         views = [ObjectView(label=o.name, size_m=o.size_m) for o in req.objects]
         matches = [m for m in memory.search(req.task, views, k=max(1, len(memory)))
-                   if _meta(m.episode).get("method") == self.variant.name]
+                   if episode_notes(m.episode).get("method") == self.variant.name]
         best = matches[0] if matches else None
         self.info["memory"] = {"episodes": len(memory), "best_score": round(best.score, 4) if best else None}
         if best is None or best.score < self.ctx.cfg.coral.memory_threshold:
             return None, None, beliefs
-        meta = _meta(best.episode)
+        meta = episode_notes(best.episode)
         try:
             stored = FormulationReply(source=best.episode.cost_source,
                                       stages=[StageSpec.model_validate(s) for s in meta.get("stages", [])],
-                                      regions=_rescale(best.episode, req), knobs=meta.get("knobs", {}),
+                                      regions=rescale(best.episode, req), knobs=meta.get("knobs", {}),
                                       reasoning=f"memory episode {best.id} (score {best.score:.2f})")
             plan, program, _ = check_formulation(stored, req, samples, steps, probe_limits())
         except (BadReply, ValueError) as exc:
             log.event(t, "memory", f"episode {best.id} unusable ({exc}); formulating instead"[:300])
             return None, None, beliefs
-        recalled = {**beliefs, **{k: _transfer(v, beliefs[k], meta.get("priors", {}).get(k))
+        recalled = {**beliefs, **{k: transfer(v, beliefs[k], meta.get("priors", {}).get(k))
                                   for k, v in best.episode.beliefs.items() if k in beliefs}}
-        self.info.update(plan_from=f"memory episode {best.id}", memory_beliefs=_dump(recalled))
+        self.info.update(plan_from=f"memory episode {best.id}", memory_beliefs=dump(recalled))
         log.event(t, "memory", f"episode {best.id} (score {best.score:.2f}) replaces the formulation; beliefs "
                   + ", ".join(f"{k} {v.mass_kg:.3g} kg / {v.friction:.3g}" for k, v in recalled.items()))
         return plan, program, recalled
@@ -334,56 +359,3 @@ class Coral:
                                              "stages": [s.model_dump() for s in plan.stages],
                                              "knobs": plan.knobs})))
         memory.close()
-
-
-def stressed(beliefs: dict[str, Any], coral: Any) -> tuple[dict[str, Any], str | None]:
-    """The priors as `coral.prior_mass_scale` / `prior_friction_scale` distort them (a stress test of the outer
-    loop: a model that misjudged the material), and the event line saying so; unchanged at scale 1."""
-    m, f = coral.prior_mass_scale, coral.prior_friction_scale
-    if (m, f) == (1.0, 1.0):
-        return beliefs, None
-    return ({k: v.model_copy(update={"mass_kg": v.mass_kg * m, "friction": v.friction * f}) for k, v in beliefs.items()},
-            f"stress: the priors scaled x{m:g} in mass and x{f:g} in friction")
-
-
-def _transfer(stored: Any, prior_now: Any, prior_then: dict | None) -> Any:
-    """A remembered belief for this trial's object. Friction is the material's and carries over as it was
-    refined; mass carries over as the refinement's correction of that episode's prior (the same material, another
-    size: the prior scales with the box's volume, a remembered absolute mass would not). An episode stored without
-    its priors gives its beliefs as they are."""
-    from kintsugi.methods.coral.types import ObjectPrior
-
-    out = ObjectPrior.model_validate(stored.model_dump())
-    try:
-        then = float(prior_then["mass_kg"]) if prior_then else 0.0
-    except (KeyError, TypeError, ValueError):
-        then = 0.0
-    if then > 0 and math.isfinite(then):
-        out = out.model_copy(update={"mass_kg": prior_now.mass_kg * out.mass_kg / then})
-    return out
-
-
-def _meta(episode: Any) -> dict[str, Any]:
-    try:
-        out = json.loads(episode.notes or "{}")
-    except ValueError:
-        return {}
-    return out if isinstance(out, dict) else {}
-
-
-def _rescale(episode: Any, req: Any) -> list[Any]:
-    """Stored regions in the object's frame, scaled per axis from the stored model's size to this one's."""
-    then = {o.label: o.size_m for o in episode.objects}
-    now = {o.name: o.size_m for o in req.objects}
-    out = []
-    for r in episode.regions:
-        if r.object in then and r.object in now:
-            k = [a / b for a, b in zip(now[r.object], then[r.object])]
-            r = r.model_copy(update={"center": tuple(c * s for c, s in zip(r.center, k))})
-        out.append(r)
-    return out
-
-
-def _dump(beliefs: dict) -> dict[str, dict[str, float]]:
-    return {k: {"mass_kg": round(v.mass_kg, 5), "friction": round(v.friction, 5)} for k, v in beliefs.items()}
-
