@@ -31,18 +31,23 @@ class FrameRecorder:
         self._commands: list[np.ndarray] = []
         self._rows: list[tuple[int, int]] = []
         self._restarts = 0
+        self._restart_steps: list[int] = []
+        self._marks: list[list] = []
 
     def attach(self, robot: Any, log: Any) -> None:
         self.driver, self._log = driver_for(robot), log
         self.driver.record_ticks(self._on_tick)
         if hasattr(self.driver, "record_restarts"):
             self.driver.record_restarts(self._on_restart)
+        if hasattr(self.driver, "record_actions"):
+            self.driver.record_actions(lambda planned, arms: self._marks.append([self.steps, planned, list(arms)]))
 
     def echo(self, text: str) -> None:
         return None
 
     def _on_restart(self) -> None:
         self._restarts += 1
+        self._restart_steps.append(self.steps)
 
     def _on_tick(self, command: np.ndarray) -> None:
         if self.steps % self.every == 0:
@@ -74,6 +79,8 @@ class FrameRecorder:
                        recovery=np.asarray(recovery, dtype=bool), edge=[""] * len(names), action=names,
                        action_number=np.asarray(numbers, dtype=np.int64), success=bool(record.success),
                        meta={"action_names": list(self.driver.action_names), "family": self.driver.family,
+                             "action_marks": self._marks, "restarts": self._restart_steps,
+                             "framework_success": bool(record.framework_success),
                              "features": {k: {"shape": list(f.shape), "unit": f.unit,
                                               "names": list(f.names) if f.names else None}
                                           for k, f in feats.items() if not f.image}})

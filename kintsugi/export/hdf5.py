@@ -67,7 +67,7 @@ class Hdf5Writer:
         g = self._data.create_group(name)
         t = ep.length
         g.attrs["num_samples"] = t
-        g.attrs["kintsugi"] = json.dumps({"key": ep.key, "success": ep.success, "fps": ep.fps,
+        g.attrs["kintsugi"] = json.dumps({"key": ep.key, "success": ep.success, "fps": ep.fps, "every": ep.every,
                                           "control_steps": ep.control_steps, **ep.meta})
         g.create_dataset("actions", data=ep.actions)
         rewards = np.zeros(t)

@@ -117,3 +117,23 @@ def test_trajectory_export_replays_through_the_policy_method(exported, tmp_path:
                                 condition=stored.condition, seed=1, overrides={"method.path": str(path)}))
     assert (again.physics_steps, again.success, again.framework_success) == (
         stored.physics_steps, stored.success, stored.framework_success)
+
+
+@pytest.mark.slow
+def test_an_hdf5_demo_at_the_control_rate_replays_step_for_step(exported, tmp_path: Path) -> None:
+    from kintsugi.campaign.store import ResultStore
+    from kintsugi.core.errors import ConfigError
+    from kintsugi.core.record import TrialSpec
+    from kintsugi.core.runner import run_trial
+    from kintsugi.export import export_campaign
+    from kintsugi.methods.policy.policies import load_policy
+
+    campaign, _, h5_at_25 = exported
+    with pytest.raises(ConfigError, match="export with --fps 250"):
+        load_policy(f"{h5_at_25}#demo_0")
+    export_campaign(campaign, "hdf5", tmp_path / "full", trials="seed=0", fps=250)
+    [stored] = [r for r in ResultStore(campaign).read() if r.seed == 0]
+    again = run_trial(TrialSpec(task=stored.task, method="policy", variant=stored.variant, condition=stored.condition,
+                                seed=0, overrides={"method.path": f"{tmp_path / 'full' / 'demo.hdf5'}#demo_0"}))
+    assert (again.physics_steps, again.success, again.framework_success) == (
+        stored.physics_steps, stored.success, stored.framework_success)

@@ -9,7 +9,8 @@ put back, as between attempts).
 Built in: `ReplayPolicy` (a recorded trial's commands, step for step) and `LinearPolicy` (behaviour
 cloning: ridge regression from the low-dimensional observation to the action, fitted with numpy on
 exported data). `load_policy(path)` takes `module:attribute` (a policy, or a class built with no
-arguments) or a `.npz` file (a trajectory -> replay, a fitted linear policy -> that policy).
+arguments), a `.npz` file (a trajectory -> replay, a fitted linear policy -> that policy) or `file.hdf5#demo_N`
+(an exported robomimic demo recorded at the control rate -> replay of its actions).
 """
 
 from __future__ import annotations
@@ -117,6 +118,8 @@ def load_policy(path: str) -> Any:
     """A policy from `module:attribute` or a `.npz` file; a one-line ConfigError on anything else."""
     if not path:
         raise ConfigError("the policy method needs a policy: --set method.path=module:callable or a .npz file")
+    if ".hdf5" in path:
+        return _from_hdf5(path)
     if path.endswith(".npz"):
         p = Path(path)
         if not p.is_file():
@@ -144,3 +147,37 @@ def load_policy(path: str) -> Any:
     if not callable(policy):
         raise ConfigError(f"policy {path!r} is not callable (a policy maps an observation dict to an action)")
     return policy
+
+
+def _from_hdf5(path: str) -> ReplayPolicy:
+    """`file.hdf5#demo_N`: replay the actions of one exported demo; it must have been exported at the control
+    rate (one frame per control period), else its actions are not the commands of every period."""
+    from kintsugi.methods.policy.trajectory import Trajectory
+
+    file, _, demo = path.partition("#")
+    if not demo:
+        raise ConfigError(f"policy {path!r}: name the demo to replay, e.g. {file}#demo_0")
+    try:
+        import h5py
+    except ImportError:
+        raise ConfigError("replaying an HDF5 demo needs h5py: pip install 'kintsugi[export]'") from None
+    if not Path(file).is_file():
+        raise ConfigError(f"policy file {file} not found")
+    with h5py.File(file, "r") as f:
+        if f"data/{demo}" not in f:
+            raise ConfigError(f"{file} has no {demo}; it has {', '.join(sorted(f['data']))}")
+        g = f[f"data/{demo}"]
+        meta = json.loads(g.attrs["kintsugi"])
+        env = json.loads(f["data"].attrs["env_args"])["env_kwargs"]
+        actions = g["actions"][:]
+    if meta.get("every", 1) != 1:
+        raise ConfigError(f"{file}#{demo} was exported at {meta.get('fps')} fps, one frame every {meta['every']} "
+                          f"control periods; a replay needs every period: export with --fps {meta.get('control_hz')}")
+    if "action_marks" not in meta:
+        raise ConfigError(f"{file}#{demo} is in the tabletop layout (gripper open/closed, no action starts), which "
+                          "cannot be replayed exactly; replay a --format trajectory export of the trial")
+    marks = [(int(s), float(p), tuple(a)) for s, p, a in meta["action_marks"]]
+    restarts = [int(s) for s in meta.get("restarts", [])]
+    source = {"key": meta.get("key"), "success": meta.get("success"), "framework_success": meta.get("framework_success")}
+    return ReplayPolicy(Trajectory(env.get("family", "tabletop"), tuple(env.get("action_names", ())), actions, marks,
+                                   restarts, source))
