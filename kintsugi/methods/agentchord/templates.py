@@ -6,7 +6,7 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from kintsugi.methods.agentchord.facts import head_yaw_deg, wrap_deg
+from kintsugi.methods.agentchord.angles import head_yaw_deg, wrap_deg
 from kintsugi.methods.agentchord.symbolic import Atom, GroundOp, PlanningError
 from kintsugi.methods.agentchord.types import Domain, SeenObject
 
