@@ -87,7 +87,13 @@ def delay_table(records: list) -> TextTable:
 
 
 def main() -> None:
-    outs = run_suites(sys.argv[2:]) if sys.argv[1:2] == ["--run"] else sys.argv[1:]
+    try:
+        from bench.pages import Block, command_line, pop_page, table_lines, write_block
+    except ModuleNotFoundError:  # run as a script: bench/ is on the path
+        from pages import Block, command_line, pop_page, table_lines, write_block
+    page, argv = pop_page(sys.argv[1:])  # --page docs/benchmarks-agentchord.md: write the tables there too
+    lines: list[str] = []
+    outs = run_suites(argv[1:]) if argv[:1] == ["--run"] else argv
     console = Console()
     print(f"machine: {machine()}")
     for out in outs:
@@ -100,6 +106,9 @@ def main() -> None:
         task = cfg.task if cfg else (records[0].task if records else "tabletop")
         console.print(f"## {out}")
         print_tables([*tables_for(task, records, cfg), delay_table(records)], console)
+        lines += [f"#### {out}", "", *table_lines([*tables_for(task, records, cfg), delay_table(records)])]
+    if page:
+        print(f"page: {write_block(page, Block('bench_agentchord_table', command_line(), lines))}")
 
 
 if __name__ == "__main__":

@@ -32,6 +32,7 @@ from kintsugi.campaign.systems.contact import summarize  # noqa: E402
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("dirs", nargs="+", type=Path)
+    ap.add_argument("--page", help="also write the tables into this benchmark page (docs/benchmarks-coral.md)")
     args = ap.parse_args()
     records = []
     for d in args.dirs:
@@ -44,6 +45,14 @@ def main() -> None:
         console.print(f"## {task}")
         print_tables(tables_for(task, [r for r in records if r.task == task]), console)
     print(json.dumps(summarize(records)))
+    if args.page:
+        try:
+            from bench.pages import Block, command_line, table_lines, write_block
+        except ModuleNotFoundError:  # run as a script: bench/ is on the path
+            from pages import Block, command_line, table_lines, write_block
+        lines = [line for task in dict.fromkeys(r.task for r in records)
+                 for line in (f"#### {task}", "", *table_lines(tables_for(task, [r for r in records if r.task == task])))]
+        print(f"page: {write_block(args.page, Block('bench_coral', command_line(), lines))}")
 
 
 if __name__ == "__main__":

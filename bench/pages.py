@@ -92,3 +92,20 @@ def main(argv: list[str]) -> int:
 
 if __name__ == "__main__":
     sys.exit(main(sys.argv[1:]))
+
+
+def table_lines(tables: list) -> list[str]:
+    """Campaign tables (`TextTable`s) as Markdown lines."""
+    from kintsugi.campaign.render import to_markdown
+
+    return [line for t in tables for line in (*to_markdown(t).splitlines(), "")]
+
+
+def pop_page(argv: list[str]) -> tuple[str | None, list[str]]:
+    """(`--page PATH` if given, the other arguments): for scripts that read their own argv."""
+    if "--page" not in argv:
+        return None, argv
+    i = argv.index("--page")
+    if i + 1 >= len(argv):
+        raise SystemExit("--page needs a path, e.g. --page docs/benchmarks-agentchord.md")
+    return argv[i + 1], argv[:i] + argv[i + 2:]

@@ -49,3 +49,24 @@ def test_bench_peg_writes_its_page(tmp_path: Path) -> None:
     text = page.read_text()
     assert "<!-- begin: bench_peg -->" in text and "| framework overhead (raw / framework) |" in text
     assert "Written by `.venv/bin/python bench/bench_peg.py --trials 2 --repeats 1 --page" in text
+
+
+@pytest.mark.slow
+def test_the_agentchord_and_coral_table_scripts_write_their_pages(tmp_path: Path) -> None:
+    from kintsugi.campaign.plan import build_config
+    from kintsugi.campaign.runner import run_campaign
+    from kintsugi.core.record import TrialRecord
+
+    cfg = build_config(task="pour-single", methods=["scripted"], variants=["default"], conditions=["none"], trials=1)
+    run_campaign(cfg, tmp_path / "b", executor="inline", progress=False)
+    coral = tmp_path / "c.jsonl"
+    coral.write_text(TrialRecord(key="flip-box/coral/default/all/0", task="flip-box", method="coral",
+                                 variant="default", condition="all", seed=0, success=True).model_dump_json() + "\n")
+    for script, arg, block in (("bench_agentchord_table.py", tmp_path / "b", "bench_agentchord_table"),
+                               ("bench_coral.py", coral, "bench_coral")):
+        page = tmp_path / f"{block}.md"
+        res = subprocess.run([sys.executable, f"bench/{script}", str(arg), "--page", str(page)], cwd=ROOT,
+                             capture_output=True, text=True, timeout=600)
+        assert res.returncode == 0, res.stderr[-2000:]
+        text = page.read_text()
+        assert f"<!-- begin: {block} -->" in text and "| " in text and f"bench/{script}" in text
