@@ -42,8 +42,8 @@ PULL_LIFT_M = 0.015
 PULL_PITCHES_DEG = (30.0, -30.0, 50.0, -50.0)
 """Hand tilts tried for the drag's grasp when no straight-down one reaches (leaning in from the arm's side)."""
 YAW_TURNS_DEG = (30.0, -30.0, 60.0, -60.0, 90.0, -90.0)
-PLACE_RINGS_M = (0.03, 0.06, 0.09, 0.12)
-FREE_PLACE_M = 0.12
+PLACE_RINGS_M = (0.03, 0.06, 0.09, 0.12, 0.16, 0.20, 0.25, 0.30)
+FREE_PLACE_M = 0.30
 """How far a place with no location in its sub-goal (standing a fallen bottle back up) may move its spot."""
 LOCATED_PLACE_M = 0.02
 """How far a place into a region or container may move its spot (the region checks allow 4 cm)."""

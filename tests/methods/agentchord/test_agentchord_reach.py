@@ -61,7 +61,7 @@ def test_a_place_moves_only_as_far_as_its_sub_goal_allows() -> None:
     free = place_alternatives(call, [cup], _standing(0.4, -0.25), located=False)
     held = place_alternatives(call, [cup], _standing(0.4, -0.25), located=True)
     dist = lambda a: float(np.hypot(a["x"] - 0.4, a["y"] + 0.25))  # noqa: E731
-    assert free and max(map(dist, free)) <= 0.12 + 1e-6 and max(map(dist, held)) <= 0.03 + 1e-6
+    assert free and max(map(dist, free)) <= 0.30 + 1e-6 and max(map(dist, held)) <= 0.03 + 1e-6
     for a in free:  # clear of the cup
         assert np.hypot(a["x"] - 0.4, a["y"] + 0.1) >= 0.045 + 0.03 + 0.03 - 1e-6
 
