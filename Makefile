@@ -1,7 +1,8 @@
 # Two commands for a fresh machine (Python 3.11 + the package registries):
 #   make demo   set up, then tour the three systems offline (A peg insertion, B AgentChord against rekep
 #               under drops, C CoRAL against L2R), print each system's tables and write runs/demo/index.html
-#   make test   set up, build the real model servers once per machine (mk/servers.mk), then run the test suite
+#   make test   set up, then run the test suite
+#   make test-servers   build llama.cpp's servers once per machine and run the real-server suite (mk/servers.mk)
 PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin

@@ -4,4 +4,9 @@
 servers: setup
 	tests/servers/prepare.sh $(abspath $(BIN))/python
 
-.PHONY: servers
+# The real-server conformance suite (tests/servers): every reasoner role of every system through the openai
+# backend against llama-server and llama-cpp-python's server, and one short trial per system.
+test-servers: servers
+	KINTSUGI_REAL_SERVERS=1 $(BIN)/pytest tests/servers -q
+
+.PHONY: servers test-servers

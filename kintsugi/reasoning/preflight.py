@@ -199,8 +199,16 @@ def _get_json(reasoner: Any, path: str) -> Any:
 
 
 def _ask(reasoner: Any, messages: list[dict[str, Any]], options: dict[str, Any], max_tokens: int = 1) -> Any:
-    return send(reasoner.client, reasoner.model, messages, {**options, "max_tokens": max_tokens},
-                where=reasoner.structured.where, timeout_s=reasoner.timeout_s, max_retries=1, what="the preflight")
+    def ask(limit: dict[str, int]) -> Any:
+        return send(reasoner.client, reasoner.model, messages, {**options, **limit}, where=reasoner.structured.where,
+                    timeout_s=reasoner.timeout_s, max_retries=1, what="the preflight")
+
+    try:
+        return ask({"max_tokens": max_tokens})
+    except EndpointError as exc:
+        if "max_completion_tokens" not in str(exc):
+            raise
+        return ask({"max_completion_tokens": max_tokens})  # OpenAI's reasoning models take only this one
 
 
 def _probe_images(reasoner: Any) -> str | None:
