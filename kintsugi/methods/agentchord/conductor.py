@@ -47,7 +47,9 @@ from kintsugi.taskgraph.monitor import Firing, MonitorBank
 
 
 MERGE_FAILS = 2
-"""A recovery whose merge check fails this many times on one edge falls back to re-planning."""
+"""A recovery whose merge check fails this many times on one edge falls back to re-planning..."""
+MAX_RERUNS = 4
+"""...as does one run this many times (each run disturbed again: a grasp closing on nothing, a loss)."""
 REPLANNED = object()
 VERDICT_UPRIGHT_DEG = 8.0
 """The goal check's `upright` tolerance at most: stricter than the tabletop scorers' 10 degrees by perception's
@@ -118,7 +120,7 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
     def _traverse(self) -> Any:
         """One traversal of the current graph: the verdict, or REPLANNED when it fell back to a new graph."""
         g, node = self.graph, self.graph.start
-        merge_fails = 0
+        merge_fails = reruns = 0
         while node != g.goal:
             edge = next_edge(g, node, self.ctg)
             if edge is None:
@@ -152,15 +154,17 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
                     firing = self._recheck(edge) if node == edge.target else None
                     self.merge_failed = firing is not None
                 merge_fails += self.merge_failed
-                if merge_fails >= MERGE_FAILS:  # the branch does not hold: the paper's fallback
-                    return self.fall_back(edge, firing)
+                reruns += node is None
+                if merge_fails >= MERGE_FAILS or reruns >= MAX_RERUNS:  # the branch does not hold: the fallback
+                    return self.fall_back(edge, f"its merge check failed {merge_fails} times" if merge_fails
+                                          >= MERGE_FAILS else f"it was run {reruns} times")
                 # else a recovery that was itself disturbed (a drop, a missed grasp) runs again
         return self.goal_holds()
 
-    def fall_back(self, edge: Edge, firing: Firing | None) -> Any:
+    def fall_back(self, edge: Edge, reason: str = f"its merge check failed {MERGE_FAILS} times") -> Any:
         """Re-plan from the current observation (`replan`, at most `max_replans` times): REPLANNED with the new
         graph adopted, or False (recorded) when there is no re-planner or its budget is spent."""
-        why = f"the recovery of {edge.id} failed its merge check {MERGE_FAILS} times"
+        why = f"the recovery of {edge.id} does not hold ({reason})"
         if self.replan is None or self.metrics.replans >= self.config.max_replans:
             self.log.event(self.robot.sim_time, "gave up", f"{why}; no re-plan left")
             return False

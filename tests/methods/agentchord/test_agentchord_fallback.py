@@ -22,17 +22,17 @@ def _conductor(replan=None, max_replans: int = 2) -> Conductor:  # noqa: ANN001
 
 def test_no_replanner_gives_up_with_the_reason() -> None:
     c = _conductor()
-    assert c.fall_back(c.graph.edge("e0"), None) is False
-    assert [e.kind for e in c.log.events] == ["gave up"] and f"{MERGE_FAILS} times" in c.log.events[0].detail
+    assert c.fall_back(c.graph.edge("e0")) is False
+    assert [e.kind for e in c.log.events] == ["gave up"] and f"failed {MERGE_FAILS} times" in c.log.events[0].detail
 
 
 def test_replans_adopt_the_new_graph_until_the_budget_is_spent() -> None:
     new = chain([2.0, 2.0, 2.0])
     c = _conductor(lambda: new, max_replans=2)
-    assert c.fall_back(c.graph.edge("e0"), None) is REPLANNED
+    assert c.fall_back(c.graph.edge("e0")) is REPLANNED
     assert c.graph is new and c.synthesis.graph is new and c.ctg[new.start] == 6.0
-    assert c.fall_back(c.graph.edge("e1"), None) is REPLANNED
-    assert c.fall_back(c.graph.edge("e1"), None) is False  # the third: budget spent
+    assert c.fall_back(c.graph.edge("e1")) is REPLANNED
+    assert c.fall_back(c.graph.edge("e1")) is False  # the third: budget spent
     assert [e.kind for e in c.log.events] == ["replan", "replan", "gave up"] and c.metrics.replans == 2
 
 
@@ -41,5 +41,5 @@ def test_a_refused_replan_is_a_recorded_failure() -> None:
         raise PlanningError("no plan reaches the goal from here")
 
     c = _conductor(refuse)
-    assert c.fall_back(c.graph.edge("e0"), None) is False
+    assert c.fall_back(c.graph.edge("e0")) is False
     assert [e.kind for e in c.log.events] == ["replan", "replan refused"]
