@@ -39,6 +39,8 @@ SHORT_PRE_GRASP_M = 0.04
 COMFORT_M = 0.5
 """Distance from the arm's base (horizontal) a dragged object is brought towards."""
 PULL_LIFT_M = 0.015
+DRAG_MAX_Z_M = 0.08
+"""A hand this low holds its object on the table (a lying bottle just taken): it can slide it."""
 PULL_PITCHES_DEG = (30.0, -30.0, 50.0, -50.0)
 """Hand tilts tried for the drag's grasp when no straight-down one reaches (leaning in from the arm's side)."""
 YAW_TURNS_DEG = (30.0, -30.0, 60.0, -60.0, 90.0, -90.0)
@@ -176,6 +178,9 @@ class Reaching:
                                          any(locates(self.graph.node(edge.target), k) for k in held))
         else:
             options = []
+            if name == "move_by_offset" and self.drag_held(edge, call):
+                if self.feasible(call):
+                    return self.robot.execute(call), call
         for alt in options:
             if self.feasible(alt):
                 tried = self.robot.execute(alt)
@@ -200,6 +205,25 @@ class Reaching:
         except TypeError:  # a robot without a planning-only mode: try it for real
             return True
         return bool(r.planned and not r.clipped)
+
+    def drag_held(self, edge: Any, call: dict) -> bool:
+        """A held object still on the table (taken where it lay at the edge of reach) that cannot be raised from
+        there: slide it along the table towards the middle of the arm's reach first. True when it was slid."""
+        state = self.robot.arm_state(call["arm"])
+        tcp = np.asarray(state.tcp_pos, float)
+        if not any(n == 2 for n in state.touching.values()) or tcp[2] > DRAG_MAX_Z_M:
+            return False
+        base = np.asarray(self.robot.bases[call["arm"]], float)
+        d = tcp[:2] - base[:2]
+        dist = float(np.linalg.norm(d))
+        move = d / max(dist, 1e-6) * float(np.clip(COMFORT_M - dist, -PULL_M, PULL_M))
+        slide = {"action": "move_by_offset", "arm": call["arm"], "dxyz": [float(move[0]), float(move[1]), 0.0]}
+        if float(np.linalg.norm(move)) < SLIDE_STEP_M or not self.feasible(slide):
+            return False
+        self.log.event(self.robot.sim_time, "pull into reach", f"{edge.id}: the held object cannot be raised where it "
+                       f"lies; slid {np.round(move, 3).tolist()} m along the table first")
+        self._execute(edge, "move_by_offset", {k: v for k, v in slide.items() if k != "action"}, unplanned_ok=True)
+        return True
 
     def pull_into_reach(self, edge: Any, call: dict, f: ObjectFeatures) -> bool:
         """Drag a lying object the arm cannot grasp for the action back into reach: take it by the part of it
