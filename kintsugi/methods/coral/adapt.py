@@ -27,6 +27,8 @@ from kintsugi.sandbox import CostProgram, ProbeLimits
 
 KNOB_CAP = 4.0
 """A refined weight stays within this factor of the library default (the paper: keep weights comparable)."""
+ESCALATION_CAP = {"timeout_scale": 2.0}
+"""Knobs an outer loop escalates on every failure ("more time") stop at this multiple of their default."""
 
 
 def parse_adaptation(raw: Any) -> AdaptReply:
@@ -49,7 +51,8 @@ def _scale(knobs: dict[str, float], key: str, factor: float, notes: list[str]) -
 
     base = DEFAULT_KNOBS[key]
     old = knobs.get(key, base)
-    new = min(max(old * factor, base / KNOB_CAP), base * KNOB_CAP)
+    cap = ESCALATION_CAP.get(key, KNOB_CAP)
+    new = min(max(old * factor, base / cap), base * cap)
     if new != old:
         knobs[key] = round(new, 6)
         notes.append(f"{key} {old:g} -> {new:g}")
@@ -72,7 +75,9 @@ def embedded_adaptation(req: AdaptRequest) -> AdaptReply:
     why: list[str] = []
     beliefs = None
     s = req.sysid
-    if s is not None and math.isfinite(s.loss_fit) and s.loss_fit < s.loss_prior:
+    if s is not None and not s.adopted:
+        why.append(f"World model kept: {s.kept_because or 'the log does not identify the fit'}.")
+    elif s is not None and math.isfinite(s.loss_fit) and s.loss_fit < s.loss_prior:
         beliefs = dict(req.beliefs)
         old = req.beliefs.get(s.object)
         beliefs[s.object] = ObjectPrior(mass_kg=s.mass_kg, friction=s.friction,

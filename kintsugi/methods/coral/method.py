@@ -246,7 +246,8 @@ class Coral:
             return None
         log.event(self._now, "sysid", fitter.story(added, phys, fit))
         return SysIdSummary(object=obj, mass_kg=phys.mass_kg, friction=phys.friction, loss_prior=fit.prior_loss,
-                            loss_fit=fit.loss, windows=len(fitter.logs))
+                            loss_fit=fit.loss, windows=len(fitter.logs), adopted=fitter.kept is None,
+                            kept_because=fitter.kept)
 
     def _history(self, attempt: int, result: Any, trace: Any, exec_log: Any, error: str | None) -> Any:
         from kintsugi.methods.coral.types import AttemptHistory, StageOutcome
@@ -349,13 +350,19 @@ class Coral:
     def _remember(self, memory: Any, req: Any, beliefs: dict, plan: Any) -> None:
         if memory is None:
             return
+        from kintsugi.methods.coral.adapt import ESCALATION_CAP
         from kintsugi.methods.coral.memory.store import Episode
         from kintsugi.methods.coral.types import ObjectView
 
+        # what succeeded (cost, regions, weights, beliefs), not the escalation path: the stages keep the first
+        # attempt's timeouts and the knobs drop the time escalation the failed attempts grew
+        first = {st["name"]: st["timeout_s"] for st in self.attempts[0]["stages"]} if self.attempts else {}
+        stages = [st.model_copy(update={"timeout_s": min(st.timeout_s, first.get(st.name, st.timeout_s))})
+                  for st in plan.stages]
+        knobs = {k: v for k, v in plan.knobs.items() if k not in ESCALATION_CAP}
         memory.add(Episode(task=self.ctx.task.name, instruction=req.task,
                            objects=[ObjectView(label=o.name, size_m=o.size_m) for o in req.objects],
                            beliefs=beliefs, cost_source=plan.source, regions=plan.regions,
                            notes=json.dumps({"method": self.variant.name, "priors": self.info.get("priors", {}),
-                                             "stages": [s.model_dump() for s in plan.stages],
-                                             "knobs": plan.knobs})))
+                                             "stages": [st.model_dump() for st in stages], "knobs": knobs})))
         memory.close()

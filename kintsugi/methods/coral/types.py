@@ -179,6 +179,10 @@ class SysIdSummary(StrictModel):
     loss_prior: float
     loss_fit: float
     windows: int
+    adopted: bool = True
+    """False: the log cannot identify the fit (the object never slid or hung from the hand) or it gains less than
+    the replay's noise; mass_kg and friction are then the beliefs kept."""
+    kept_because: str | None = None
 
 
 class AttemptHistory(StrictModel):

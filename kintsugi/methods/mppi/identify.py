@@ -39,6 +39,10 @@ press their pads on each other)."""
 TABLE_TOUCH_M = 0.002
 GRIND_N = 3.0
 """Fingertips this close to the table top while the wrist pushes down harder than this: grinding on it."""
+MIN_GAIN = 0.05
+"""A fit is adopted only when it lowers the replay loss by more than this (binned residual units: 5 mm / 1 N)..."""
+MIN_GAIN_FRACTION = 0.1
+"""...and by more than this fraction of the prior's loss: a smaller gain is the replay's own noise."""
 
 
 def raw_ft(obs: Observation, hand_weight_n: float) -> np.ndarray:
@@ -56,8 +60,10 @@ def _kind(seg: list[Observation], obj: str, rest_z: float) -> str | None:
     - "grind": as "slide" or "felt", but the fingertips were down on the table top pressing on it: the
       pads' drag on the table (their friction is high, and it flips between stick and slip) swamps the
       object's own friction force, and no replay follows it; such a window is left out;
-    - "felt": the wrist felt a force, or the object moved off the table (lifted, carried), or it moved in the
-      pinch of both pads (the pads' grip, not the table, then sets how it moves): its weight is in it.
+    - "lift": the object moved off the table (lifted, carried): its weight hangs on the hand, so its mass is in
+      the wrist's force;
+    - "felt": the wrist felt a force, or the object moved in the pinch of both pads (the pads' grip, not the
+      table, then sets how it moves): kept for the fit, but it tells neither parameter apart on its own.
     """
     moving = max(np.linalg.norm(o.objects[obj].lin_vel) for o in seg) > MOVING_M_S
     pressed = max(np.linalg.norm(o.force) for o in seg) > FORCE_N
@@ -68,7 +74,9 @@ def _kind(seg: list[Observation], obj: str, rest_z: float) -> str | None:
     if grinding and on_table:
         return "grind"
     pinched = any(o.touch.min() > PINCH_N and o.opening > PINCH_OPENING_M for o in seg)
-    return "slide" if moving and on_table and not pinched else "felt"
+    if moving and on_table and not pinched:
+        return "slide"
+    return "lift" if not on_table else "felt"
 
 
 def windows(planning: PlanningWorld, log: ExecutionLog, obj: str, ticks: int = WINDOW_TICKS) -> list[ReplayLog]:
@@ -84,12 +92,14 @@ def windows(planning: PlanningWorld, log: ExecutionLog, obj: str, ticks: int = W
     dt = float(np.median(np.diff([o.t for o in log.obs])))
     rest_z = float(log.obs[0].objects[obj].pos[2])
     picked: dict[str, list[int]] = {"slide": [], "felt": []}
+    label: dict[int, str] = {}
     for i in range(0, n - ticks + 1, ticks):
         kind = _kind(log.obs[i:i + ticks + 1], obj, rest_z)
-        if kind in picked:
-            picked[kind].append(i)
+        if kind in ("slide", "felt", "lift"):
+            picked["slide" if kind == "slide" else "felt"].append(i)
+            label[i] = kind
     slides = _thinned(picked["slide"], MAX_WINDOWS - min(MIN_FELT, len(picked["felt"])))
-    kinds = {i: "felt" for i in _thinned(picked["felt"], MAX_WINDOWS - len(slides))} | {i: "slide" for i in slides}
+    kinds = {i: label[i] for i in _thinned(picked["felt"], MAX_WINDOWS - len(slides))} | {i: "slide" for i in slides}
     out: list[ReplayLog] = []
     for i, kind in sorted(kinds.items()):
         seg = log.obs[i:i + ticks + 1]
@@ -136,6 +146,8 @@ class BeliefFitter:
         substeps = max(1, round(sim.planning_timestep_s / sim.timestep_s))
         self.cfg = cfg or SysIdConfig(grid=9, zoom_rounds=2, max_evals=40, substeps=substeps, window_cap=WINDOW_CAP)
         self.logs: list[ReplayLog] = []
+        self.kept: str | None = None
+        """Why the last fit was not adopted (None: it was)."""
 
     def add(self, log: ExecutionLog) -> int:
         new = windows(self.planning, log, self.obj)
@@ -149,20 +161,41 @@ class BeliefFitter:
         rather than report whatever a flat loss happens to favour."""
         return any(w.label == "slide" for w in self.logs)
 
+    @property
+    def weighed(self) -> bool:
+        """Whether any window so far saw the object slide or hang from the hand: only then does its mass leave a
+        trace (a press against a wall or a touch does not move it, and any mass replays it alike)."""
+        return any(w.label in ("slide", "lift") for w in self.logs)
+
     def story(self, added: int, phys: Physics, result: SysIdResult) -> str:
-        """One line for the trial's events: what the last fit saw and found."""
+        """One line for the trial's events: what the last fit saw and found, or why the belief was kept."""
+        if self.kept:
+            return (f"{added} new windows ({len(self.logs)} in all): {self.obj} kept at mass {phys.mass_kg:.3f} kg, "
+                    f"friction {phys.friction:.3f}: {self.kept}")
         return (f"{added} new windows ({len(self.logs)} in all): {self.obj} mass {phys.mass_kg:.3f} kg, friction "
                 f"{phys.friction:.3f} (loss {result.prior_loss:.3g} -> {result.loss:.3g})"
                 + ("" if self.slid else "; friction kept: the object never slid on the table"))
 
     def fit(self) -> tuple[Physics, SysIdResult]:
-        """Fit on every window so far and write the beliefs into the planning world (all the object's geoms).
-        The friction is fitted only once the object has slid (see `slid`)."""
+        """Fit on every window so far and, when the fit is identifiable, write it into the planning world (all the
+        object's geoms). The friction is fitted only once the object has slid (`slid`), the mass only once it
+        slid or hung from the hand (`weighed`); the fit is adopted only when it lowers the replay loss beyond
+        noise (`MIN_GAIN`, `MIN_GAIN_FRACTION`). Otherwise the belief is kept and `kept` says why."""
         if not self.logs:
             raise ConfigError(f"no informative window in the log: {self.obj!r} never moved and nothing was felt")
+        belief = self.planning.physics_of(self.obj)
         params = self.params if self.slid else self.params[:1]
         result = fit(SysIdProblem(self.planning.model, params, self.signals, self.logs, self.cfg))
-        belief = self.planning.physics_of(self.obj)
+        gain = result.prior_loss - result.loss
+        self.kept = None
+        if not self.weighed:
+            self.kept = "the object never slid or hung from the hand, so the log cannot tell its mass"
+        elif not gain > max(MIN_GAIN, MIN_GAIN_FRACTION * result.prior_loss):
+            self.kept = (f"the fit lowers the replay loss by {gain:.3g} ({result.prior_loss:.3g} -> {result.loss:.3g}), "
+                         "within the replay's noise")
+        if self.kept:
+            self.planning.set_beliefs({self.obj: belief})
+            return belief, result
         phys = Physics(mass_kg=result.params[f"mass:{self.obj}"],
                        friction=result.params.get(f"friction:{self.geom}", belief.friction))
         self.planning.set_beliefs({self.obj: phys})

@@ -22,10 +22,11 @@ def test_a_second_trial_recalls_the_first_and_records_it(tmp_path) -> None:
 
 
 def test_a_failed_attempt_records_its_adaptation_in_typed_figures() -> None:
-    """One second of budget cannot tip the box: the first attempt fails, sysid and the adaptation run."""
+    """One second of budget cannot tip the box from the start: the first attempt fails, sysid and the adaptation
+    run (the second may or may not finish; its verdict is never looser than the scorer)."""
     r = run_trial(TrialSpec(task="flip-box", method="coral", variant="default", condition="all", seed=0,
                             overrides={"control.episode_s": 1.0, "coral.max_attempts": 2, "control.samples": 32}))
-    assert r.error is None and not r.success and not r.framework_success
+    assert r.error is None and (r.success or not r.framework_success)
     first, second = CoralFigures.of(r).attempts
     assert not first.reached and first.adaptation and first.sysid is not None and first.history is not None
     assert first.beliefs_after == second.beliefs_before
