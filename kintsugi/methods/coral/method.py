@@ -42,10 +42,13 @@ def probe_limits() -> Any:
 
 
 def object_views(known: Any) -> list[Any]:
-    """What the priors role is told of each object: its label and the size of its known model."""
-    from kintsugi.methods.coral.types import ObjectView
+    """What the priors role is told of each object: its label, the size of its known model's main part, and
+    every part's size and place (a board's plate and handle)."""
+    from kintsugi.methods.coral.types import ObjectView, PartView
 
-    return [ObjectView(label=n, size_m=tuple(2 * h for h in g.parts[0].half)) for n, g in known.geometry.items()]
+    return [ObjectView(label=n, size_m=tuple(2 * h for h in g.parts[0].half),
+                       parts=[PartView(size_m=tuple(2 * h for h in p.half), offset_m=p.pos) for p in g.parts])
+            for n, g in known.geometry.items()]
 
 
 @dataclass(frozen=True)

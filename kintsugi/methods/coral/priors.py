@@ -68,7 +68,7 @@ def embedded_priors(request: PriorsRequest) -> PriorsReply:
     objects = {}
     for obj in request.objects:
         m = material_of(obj.label)
-        volume = math.prod(obj.size_m)
+        volume = obj.volume_m3
         objects[obj.label] = ObjectPrior(mass_kg=round(m.density_kg_m3 * volume, 4), friction=m.friction,
                                          material=m.name)
     why = "; ".join(f"{o.label}: looks {objects[o.label].material}" for o in request.objects)
@@ -107,7 +107,7 @@ def check_priors(reply: PriorsReply, request: PriorsRequest) -> tuple[PriorsRepl
         for field in ("mass_kg", "friction"):
             if not math.isfinite(getattr(prior, field)):
                 raise BadReply(f"{label}.{field} is {getattr(prior, field)}; give a finite number")
-        volume = math.prod(obj.size_m)
+        volume = obj.volume_m3
         lo = max(MASS_BOUNDS_KG[0], DENSITY_BOUNDS_KG_M3[0] * volume)
         hi = max(lo, min(MASS_BOUNDS_KG[1], DENSITY_BOUNDS_KG_M3[1] * volume))
         mass = _clamp(prior.mass_kg, lo, hi, f"{label}.mass_kg", notes)

@@ -19,11 +19,27 @@ from kintsugi.core.config import StrictModel
 Vec3 = tuple[float, float, float]
 
 
+class PartView(StrictModel):
+    """One box of an object's known model (a board's plate, its handle)."""
+
+    size_m: Vec3 = Field(description="extents of this part, metres (x, y, z)")
+    offset_m: Vec3 = Field(default=(0.0, 0.0, 0.0), description="its centre in the object's frame, metres")
+
+
 class ObjectView(StrictModel):
     """One object as the robot knows it before touching it."""
 
     label: str = Field(min_length=1, max_length=80, description="what the object is, e.g. 'cutting board'")
-    size_m: Vec3 = Field(description="bounding-box extents of its known model, metres (x, y, z)")
+    size_m: Vec3 = Field(description="extents of its known model's main part, metres (x, y, z)")
+    parts: list[PartView] = Field(default_factory=list, max_length=16,
+                                  description="every part of its known model (empty: one part of size_m)")
+
+    @property
+    def volume_m3(self) -> float:
+        """The known model's volume: the sum of its parts (a board's handle included)."""
+        if self.parts:
+            return float(sum(math.prod(p.size_m) for p in self.parts))
+        return float(math.prod(self.size_m))
 
     @field_validator("size_m")
     @classmethod

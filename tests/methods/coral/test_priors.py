@@ -145,3 +145,15 @@ def test_priors_role_over_the_openai_protocol_repairs_then_clamps() -> None:
         first["messages"][0]["content"]
     assert "lacks: cardboard box" in json.dumps(second["messages"])  # the repair round quoted the problem
     assert rec.records[0].role == "priors" and rec.records[0].attempts == 2
+
+
+def test_every_part_of_a_known_model_counts_toward_the_prior() -> None:
+    """A board is told as its plate and its handle; the embedded prior weighs both (the plate alone is light)."""
+    from kintsugi.methods.coral.types import PartView
+
+    board = ObjectView(label="cutting board", size_m=(0.24, 0.18, 0.02),
+                       parts=[PartView(size_m=(0.24, 0.18, 0.02)), PartView(size_m=(0.1, 0.05, 0.02), offset_m=(0.17, 0, 0))])
+    plate = ObjectView(label="cutting board", size_m=(0.24, 0.18, 0.02))
+    both = embedded_priors(PriorsRequest(task="pick the board", objects=[board])).objects["cutting board"]
+    alone = embedded_priors(PriorsRequest(task="pick the board", objects=[plate])).objects["cutting board"]
+    assert both.mass_kg == pytest.approx(alone.mass_kg * (0.24 * 0.18 + 0.1 * 0.05) / (0.24 * 0.18), rel=1e-3)
