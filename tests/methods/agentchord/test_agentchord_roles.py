@@ -73,11 +73,11 @@ def test_arranger_adds_forward_branches_from_its_knowledge_base() -> None:
     arranged = embedded_arrange(arranger_request(reply, req))
     result = check_arrangement(arranged, graph)
     result.graph.validate(tabletop_vocab())
-    assert not result.rejected and len(result.kept) == 21
+    assert not result.rejected and len(result.kept) == 24
     modes = {(e.id, m.failure_mode) for e, m in result.graph.monitors()}
     assert ("e1_grasp", "missed_grasp") in modes and ("e3_carry_over", "drop") in modes
     # A knocked-over bottle is stood back up before the side grasp (the stand_up operator).
-    stand = result.graph.edge("re.e1_grasp.toppled.right.1")
+    stand = result.graph.edge("re.e1_grasp.toppled.right.lying.1")
     assert [a.name for a in stand.actions] == ["grasp", "move_by_offset", "rotate_eef", "place"]
     # A dropped bottle may land standing or lying: a hub branches on what perception sees once it is at rest.
     hub = result.graph.edge("re.e3_carry_over.drop.right.0").target
@@ -128,7 +128,7 @@ def test_both_roles_are_recorded_on_the_embedded_backend() -> None:
     result, _ = ask_arrange(rec, arranger_request(reply, req), graph, tabletop_vocab())
     assert [r.role for r in rec.records] == ["composer", "arranger"]
     assert all(r.backend == "embedded" and r.error is None for r in rec.records)
-    assert len(result.kept) == 21
+    assert len(result.kept) == 24
 
 
 def test_an_unplannable_goal_is_a_recorded_reasoning_error() -> None:
@@ -167,7 +167,7 @@ def test_roles_over_the_openai_protocol_repair_a_bad_graph() -> None:
         graph, _ = ask_compose(rec, req, tabletop_vocab())
         result, _ = ask_arrange(rec, arranger_request(good, req), graph, tabletop_vocab())
         sent = [json.dumps(r["messages"]) for r in server.requests]
-    assert graph.goal == "s6_place" and len(result.kept) == 21
+    assert graph.goal == "s6_place" and len(result.kept) == 24
     assert [(r.role, r.attempts) for r in rec.records] == [("composer", 2), ("arranger", 2)]
     assert "Role: composer" in sent[0] and "planning module" in sent[0] and "image_url" in sent[0]
     assert "unknown action 'teleport'" in sent[1]
