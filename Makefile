@@ -27,6 +27,7 @@ demo: setup
 	@echo "open runs/demo/index.html: the three systems' tables, a video of each, a page per trial"
 
 include mk/servers.mk
+include mk/lerobot.mk
 
 test: setup
 	$(BIN)/pytest -n 2

@@ -39,6 +39,7 @@ LAYERS: dict[str, int] = {
     "campaign": 4,
     "export": 5,
     "cli": 6,
+    "gym": 7,
 }
 TOP = max(LAYERS.values()) + 1
 """The layer of `kintsugi/__init__.py` (and of any module directly under kintsugi/)."""
