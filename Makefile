@@ -1,8 +1,8 @@
 # Two commands for a fresh machine (Python 3.11 + the package registries):
 #   make demo   set up, then tour the three systems offline (A peg insertion, B AgentChord against rekep
 #               under drops, C CoRAL against L2R), print each system's tables and write runs/demo/index.html
-#   make test   set up, then run the test suite
-#   make test-servers   build llama.cpp's servers once per machine and run the real-server suite (mk/servers.mk)
+#   make test   set up, build llama.cpp's llama-server once per machine (mk/servers.mk), then run the test suite
+#   make test-servers   also build llama-cpp-python's server and run the real-server suite against both
 PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
@@ -29,7 +29,7 @@ demo: setup
 include mk/servers.mk
 include mk/lerobot.mk
 
-test: setup
-	$(BIN)/pytest -n 2
+test: setup servers
+	KINTSUGI_REAL_SERVERS=1 $(BIN)/pytest -n 2
 
 .PHONY: setup demo test

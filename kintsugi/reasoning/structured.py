@@ -239,12 +239,12 @@ class StructuredClient:
 
 def _ignored(message: Any, finish_reason: str | None, option: Option) -> str | None:
     """Why a strict-mode reply shows the server ignored the option, or None if it complied."""
-    if getattr(message, "refusal", None):
-        return None
+    if getattr(message, "refusal", None) or finish_reason == "length":
+        return None  # a truncated reply is the token limit's fault, not the server's
     if option == "tools":
         return None if getattr(message, "tool_calls", None) else 'the reply had no tool call despite tool_choice="required"'
-    if finish_reason == "length" or loads_object(message.content or "") is not None:
-        return None  # a truncated reply is the token limit's fault, not the server's
+    if loads_object(message.content or "") is not None:
+        return None
     return "the reply was not a bare JSON object despite response_format json_schema"
 
 

@@ -1,8 +1,8 @@
 """Session fixtures: the tiny model and the real servers serving it (`make servers` builds them once per
 machine; `make test-servers` builds them and runs this suite).
 
-The suite runs when KINTSUGI_REAL_SERVERS=1 (set by `make test-servers`); otherwise, and where this machine
-cannot build the servers, it skips with the reason."""
+The suite runs when KINTSUGI_REAL_SERVERS=1 (set by `make test` and `make test-servers`); otherwise, and where
+this machine cannot build the servers, it skips with the reason."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ import pytest
 
 from tests.servers.servers import Server, missing, start_llama_cpp_python, start_llama_server, tiny_model
 
-LARGE_CONTEXT = 16384
+LARGE_CONTEXT = 32768
 SMALL_CONTEXT = 2048
 
 
@@ -43,7 +43,7 @@ def _serve(start, model: Path, tmp: Path, context: int) -> Iterator[Server]:
 
 @pytest.fixture(scope="session")
 def llama_server(tiny_gguf: Path, tmp_path_factory: pytest.TempPathFactory) -> Iterator[Server]:
-    """llama.cpp's server with a 16k context (requests of every role fit)."""
+    """llama.cpp's server with a 32k context (the requests of every role fit; AgentChord's composer is ~30k tokens)."""
     _need("llama-server")
     yield from _serve(start_llama_server, tiny_gguf, tmp_path_factory.mktemp("llama-server"), LARGE_CONTEXT)
 

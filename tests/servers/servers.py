@@ -42,7 +42,7 @@ def missing(what: str) -> str | None:
     return None
 
 
-def tiny_model(out: Path, context: int = 16384, seed: int = 0) -> Path:
+def tiny_model(out: Path, context: int = 32768, seed: int = 0) -> Path:
     """Write the tiny GGUF model (its vocabulary from our prompt files) with the tool venv's `gguf`."""
     subprocess.run([str(TOOLS_PYTHON), str(HERE / "tiny_gguf.py"), str(out), "--context", str(context),
                     "--seed", str(seed), "--words", *map(str, PROMPTS)], check=True, capture_output=True, timeout=120)
@@ -101,14 +101,14 @@ def _start(name: str, cmd: list[str], port: int, log: Path, ready: str) -> Serve
     raise RuntimeError(f"{name} did not answer {ready} within {START_TIMEOUT_S:g} s: {log.read_text()[-2000:]}")
 
 
-def start_llama_server(model: Path, log: Path, context: int = 16384) -> Server:
+def start_llama_server(model: Path, log: Path, context: int = 32768) -> Server:
     port = free_port()
     cmd = [str(LLAMA_SERVER), "-m", str(model), "--host", "127.0.0.1", "--port", str(port), "--jinja",
            "-c", str(context), "-np", "1", "-t", "1", "--seed", "0", "--alias", "tiny"]
     return _start("llama-server", cmd, port, log, "/health")
 
 
-def start_llama_cpp_python(model: Path, log: Path, context: int = 16384) -> Server:
+def start_llama_cpp_python(model: Path, log: Path, context: int = 32768) -> Server:
     port = free_port()
     cmd = [str(TOOLS_PYTHON), "-m", "llama_cpp.server", "--model", str(model), "--host", "127.0.0.1",
            "--port", str(port), "--n_ctx", str(context), "--n_threads", "1", "--seed", "0",

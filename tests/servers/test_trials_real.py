@@ -35,7 +35,8 @@ def test_one_trial_per_system_with_measurements_instead_of_images(llama_server: 
     assert rec.reasoning_errors == sum(1 for c in rec.transcript if c["error"])
     for call in rec.transcript:
         assert (call["reply"] is None) != (call["error"] is None), call
-        assert call["backend"] == "openai" and call["images_sent"] == 0 and call["tokens_in"] > 0
+        assert call["backend"] == "openai" and call["images_sent"] == 0
+        assert call["tokens_in"] > 0 or call["error"]  # an endpoint error may come before any token is counted
     if rec.error is not None:  # a recorded reasoning/endpoint error, never a crash
         assert "Traceback" not in rec.error and "Error" in rec.error.splitlines()[0], rec.error
     if task == "peg-insertion":

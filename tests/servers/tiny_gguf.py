@@ -1,12 +1,13 @@
 """Write a tiny, seeded, random-weight llama model as GGUF (about 1 MB), for serving with llama.cpp in tests.
 
 Run with a Python that has the `gguf` package (the servers' tool venv, see `build_tools.sh`):
-    python tiny_gguf.py OUT.gguf [--context 16384] [--seed 0] [--words FILE ...]
+    python tiny_gguf.py OUT.gguf [--context 32768] [--seed 0] [--words FILE ...]
 
 The model knows nothing; it exists so real server software can be driven end to end. Its tokenizer is
 SentencePiece-style (`llama`): the 256 byte tokens, printable ASCII, and the words (with their prefixes)
 of the given text files, so English and JSON cost roughly what they cost a real tokenizer (a few
-characters per token). The chat template is ChatML with a tools section.
+characters per token). The chat template is ChatML with tools as <tool_call> JSON (the widely used Qwen2.5 layout, which
+llama.cpp's server parses).
 """
 
 from __future__ import annotations
@@ -25,29 +26,33 @@ ROPE_DIM = EMBED // HEADS
 SPACE = "\u2581"  # SentencePiece's word boundary
 MAX_WORDS = 3000
 
-CHAT_TEMPLATE = """{%- set sys = namespace(text='') -%}
-{%- for m in messages if m.role == 'system' -%}{%- set sys.text = sys.text + m.content -%}{%- endfor -%}
-{%- if sys.text or tools -%}
-<|im_start|>system
-{{ sys.text }}
-{%- if tools %}
-# Tools
-You may call one or more functions. Their signatures:
-{%- for t in tools %}
-{{ t | tojson }}
+CHAT_TEMPLATE = r"""{%- if tools %}
+{{- '<|im_start|>system\n' }}
+{%- if messages[0]['role'] == 'system' %}{{- messages[0]['content'] }}{%- else %}{{- 'You are a helpful assistant.' }}{%- endif %}
+{{- "\n\n# Tools\n\nYou may call one or more functions.\n\nFunction signatures within <tools></tools> XML tags:\n<tools>" }}
+{%- for tool in tools %}{{- "\n" }}{{- tool | tojson }}{%- endfor %}
+{{- "\n</tools>\n\nFor each call, return a JSON object with the function name and arguments within <tool_call></tool_call> XML tags:\n<tool_call>\n{\"name\": <function-name>, \"arguments\": <args-json-object>}\n</tool_call><|im_end|>\n" }}
+{%- else %}
+{%- if messages[0]['role'] == 'system' %}{{- '<|im_start|>system\n' + messages[0]['content'] + '<|im_end|>\n' }}{%- endif %}
+{%- endif %}
+{%- for message in messages %}
+{%- if (message.role == "user") or (message.role == "system" and not loop.first) or (message.role == "assistant" and not message.tool_calls) %}
+{{- '<|im_start|>' + message.role + '\n' + message.content + '<|im_end|>' + '\n' }}
+{%- elif message.role == "assistant" %}
+{{- '<|im_start|>' + message.role }}
+{%- if message.content %}{{- '\n' + message.content }}{%- endif %}
+{%- for tool_call in message.tool_calls %}
+{%- if tool_call.function is defined %}{%- set tool_call = tool_call.function %}{%- endif %}
+{{- '\n<tool_call>\n{"name": "' }}{{- tool_call.name }}{{- '", "arguments": ' }}{{- tool_call.arguments | tojson }}{{- '}\n</tool_call>' }}
 {%- endfor %}
-Answer with <tool_call>{"name": ..., "arguments": ...}</tool_call> for each call.
-{%- endif %}<|im_end|>
-{% endif -%}
-{%- for m in messages if m.role != 'system' -%}
-<|im_start|>{{ m.role }}
-{% if m.content is string %}{{ m.content }}{% elif m.content %}{% for p in m.content %}{% if p.type == 'text' %}{{ p.text }}{% endif %}{% endfor %}{% endif %}
-{%- if m.tool_calls %}{% for c in m.tool_calls %}
-<tool_call>{"name": "{{ c.function.name }}", "arguments": {{ c.function.arguments }}}</tool_call>
-{%- endfor %}{% endif %}<|im_end|>
-{% endfor -%}
-{%- if add_generation_prompt %}<|im_start|>assistant
-{% endif -%}"""
+{{- '<|im_end|>\n' }}
+{%- elif message.role == "tool" %}
+{%- if (loop.index0 == 0) or (messages[loop.index0 - 1].role != "tool") %}{{- '<|im_start|>user' }}{%- endif %}
+{{- '\n<tool_response>\n' }}{{- message.content }}{{- '\n</tool_response>' }}
+{%- if loop.last or (messages[loop.index0 + 1].role != "tool") %}{{- '<|im_end|>\n' }}{%- endif %}
+{%- endif %}
+{%- endfor %}
+{%- if add_generation_prompt %}{{- '<|im_start|>assistant\n' }}{%- endif %}"""
 
 
 def vocabulary(texts: list[str]) -> tuple[list[str], list[float], list[int]]:
@@ -129,7 +134,7 @@ def write(out: Path, context: int, seed: int, texts: list[str]) -> None:
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("out", type=Path)
-    parser.add_argument("--context", type=int, default=16384)
+    parser.add_argument("--context", type=int, default=32768)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--words", type=Path, nargs="*", default=[], help="text files whose words join the vocabulary")
     args = parser.parse_args()
