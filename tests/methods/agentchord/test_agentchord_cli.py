@@ -17,7 +17,7 @@ def test_graph_prints_and_draws_the_compiled_graph(tmp_path: Path) -> None:
     png, dot, js = tmp_path / "g.png", tmp_path / "g.dot", tmp_path / "g.json"
     r = CliRunner().invoke(app, ["graph", "pour-single", "--out", str(png), "--dot", str(dot), "--json", str(js)])
     assert r.exit_code == 0, r.output
-    assert "Eq. 8: 21 recovery branches kept, 0 dropped" in r.output and "s6_place" in r.output
+    assert "Eq. 8: 24 recovery branches kept, 0 dropped" in r.output and "s6_place" in r.output
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
     assert 'style="rounded,dashed"' in dot.read_text() and "digraph" in dot.read_text()
     g = TaskGraph.from_json(js.read_text())
