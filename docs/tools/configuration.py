@@ -39,11 +39,6 @@ def _table(rows: list[tuple[str, str, str]]) -> list[str]:
     return out
 
 
-def _own(registry):  # noqa: ANN001, ANN202
-    """kintsugi's own entries: plugins a user installed (the test suite's toy plugin too) are not documented."""
-    return [e for e in registry if getattr(e.factory, "__module__", "").startswith("kintsugi.")]
-
-
 def render() -> str:
     import kintsugi  # noqa: F401 - headless rendering before mujoco loads
     from kintsugi.core.plugins import load_builtins
@@ -58,13 +53,13 @@ def render() -> str:
              "(every method of the run) or `methods.<name>.<key>` (one method); reasoner settings `reasoner.<key>`.",
              "An unknown key or a bad value is a one-line error naming the key.", "", "## Tasks", ""]
     first_of: dict[type, tuple[str, list]] = {}
-    for entry in sorted(_own(TASKS), key=lambda e: e.name):
+    for entry in sorted(TASKS, key=lambda e: e.name):
         task = entry.factory()
         cfg = task.config({})
         rows = _rows(type(cfg), "", cfg)
         lines += [f"### `{entry.name}`", "", entry.description, "",
                   f"Conditions: {', '.join(f'`{c}`' for c in task.conditions)}. "
-                  f"Methods: {', '.join(f'`{m.name}`' for m in _own(METHODS) if task.method_tag in m.tags)}.", ""]
+                  f"Methods: {', '.join(f'`{m.name}`' for m in METHODS if task.method_tag in m.tags)}.", ""]
         if type(cfg) not in first_of:
             first_of[type(cfg)] = (entry.name, rows)
             lines += _table(rows) + [""]
@@ -79,7 +74,7 @@ def render() -> str:
         if gone:
             lines += ["Without " + ", ".join(f"`{k}`" for k in gone) + ".", ""]
     lines += ["## Methods", ""]
-    for entry in sorted(_own(METHODS), key=lambda e: e.name):
+    for entry in sorted(METHODS, key=lambda e: e.name):
         lines += [f"### `{entry.name}`", "", entry.description, ""]
         settings = entry.config() if entry.config is not None else None
         rows = _rows(type(settings), "method.", settings) if settings is not None else []
