@@ -110,12 +110,13 @@ class Driver(ABC):
         (a method's skills or actions): how a trial's low-level trajectory is logged for replay."""
 
     @property
-    @abstractmethod
-    def physics_steps(self) -> int: ...
+    def physics_steps(self) -> int:
+        """Physics steps the driven world (`self.world`, set by each driver) has taken."""
+        return self.world.steps
 
     @property
-    @abstractmethod
-    def sim_time(self) -> float: ...
+    def sim_time(self) -> float:
+        return float(self.world.data.time)
 
     def continuous(self, key: str, quat: np.ndarray, w_index: int) -> np.ndarray:
         """`quat` on the hemisphere of the last one seen under `key` (q and -q are one rotation; a sign flip

@@ -118,11 +118,3 @@ class ContactDriver(Driver):
         r = self.world.renderer()
         r.update_scene(self.world.data, camera="scene")
         return r.render().copy()
-
-    @property
-    def physics_steps(self) -> int:
-        return self.world.steps
-
-    @property
-    def sim_time(self) -> float:
-        return float(self.world.data.time)

@@ -95,11 +95,3 @@ class PegDriver(Driver):
 
     def render(self) -> np.ndarray:
         return self.world.render()
-
-    @property
-    def physics_steps(self) -> int:
-        return self.world.steps
-
-    @property
-    def sim_time(self) -> float:
-        return float(self.world.data.time)

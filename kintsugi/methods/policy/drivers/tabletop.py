@@ -159,11 +159,3 @@ class TabletopDriver(Driver):
 
     def render(self) -> np.ndarray:
         return np.hstack([self.world.render(c) for c in CAMERAS])
-
-    @property
-    def physics_steps(self) -> int:
-        return self.world.steps
-
-    @property
-    def sim_time(self) -> float:
-        return float(self.world.data.time)
