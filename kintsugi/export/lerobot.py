@@ -83,6 +83,23 @@ def write_video(path: Path, frames: np.ndarray, fps: float) -> None:
         writer.close()
 
 
+def frame_columns(ep: Episode, t: int, episode: int, first: int, task_index: int, actions: Vocab) -> dict[str, Any]:
+    """The per-frame columns both LeRobot layouts share: time and indices, the episode's end and success, and
+    which action (and whether a recovery) each frame belongs to."""
+    return {
+        "timestamp": (np.arange(t) / ep.fps).astype(np.float32),
+        "frame_index": np.arange(t, dtype=np.int64),
+        "episode_index": np.full(t, episode, dtype=np.int64),
+        "index": np.arange(first, first + t, dtype=np.int64),
+        "task_index": np.full(t, task_index, dtype=np.int64),
+        "next.done": np.arange(t) == t - 1,
+        "next.success": (np.arange(t) == t - 1) & ep.success,
+        "segment.recovery": ep.recovery,
+        "segment.action_index": actions.ids(ep.action),
+        "segment.action_number": ep.action_number,
+    }
+
+
 class LeRobotWriter:
     def __init__(self, out_dir: Path, source: dict[str, Any]) -> None:
         self.root = Path(out_dir)
@@ -109,19 +126,8 @@ class LeRobotWriter:
             "observation.eef_pose": pose_of(ep)[:t].astype(np.float32),
             "action": ep.actions.astype(np.float32),
         }
-        scalars = {
-            "timestamp": (np.arange(t) / ep.fps).astype(np.float32),
-            "frame_index": np.arange(t, dtype=np.int64),
-            "episode_index": np.full(t, i, dtype=np.int64),
-            "index": np.arange(self._frames, self._frames + t, dtype=np.int64),
-            "task_index": np.full(t, task_index, dtype=np.int64),
-            "next.done": np.arange(t) == t - 1,
-            "next.success": (np.arange(t) == t - 1) & ep.success,
-            "segment.recovery": ep.recovery,
-            "segment.edge_index": self.edges.ids(ep.edge),
-            "segment.action_index": self.actions.ids(ep.action),
-            "segment.action_number": ep.action_number,
-        }
+        scalars = frame_columns(ep, t, i, self._frames, task_index, self.actions)
+        scalars["segment.edge_index"] = self.edges.ids(ep.edge)
         arrays = {k: pa.FixedSizeListArray.from_arrays(pa.array(v.reshape(-1)), v.shape[1]) for k, v in cols.items()}
         arrays |= {k: pa.array(v) for k, v in scalars.items()}
         path = self.root / DATA_PATH.format(episode_chunk=chunk, episode_index=i)

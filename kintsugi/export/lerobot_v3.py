@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 
 from kintsugi.export.hdf5 import Vocab
-from kintsugi.export.lerobot import _pyarrow, _stats, _video_stats, write_video
+from kintsugi.export.lerobot import _pyarrow, _stats, _video_stats, frame_columns, write_video
 from kintsugi.export.recorder import ACTION_NAMES, Episode
 
 CODEBASE_VERSION = "v3.0"
@@ -75,18 +75,7 @@ class LeRobotV3Writer:
         state = np.hstack([ep.obs[k][:t].reshape(t, -1) for k in self._keys]).astype(np.float32)
         cols = {"observation.state": state, "action": ep.actions.astype(np.float32)}
         cols |= {f"observation.{k}": ep.obs[k][:t].reshape(t, -1).astype(np.float32) for k in self._keys}
-        scalars = {
-            "timestamp": (np.arange(t) / ep.fps).astype(np.float32),
-            "frame_index": np.arange(t, dtype=np.int64),
-            "episode_index": np.full(t, i, dtype=np.int64),
-            "index": np.arange(self._frames, self._frames + t, dtype=np.int64),
-            "task_index": np.full(t, task_index, dtype=np.int64),
-            "next.done": np.arange(t) == t - 1,
-            "next.success": (np.arange(t) == t - 1) & ep.success,
-            "segment.recovery": ep.recovery,
-            "segment.action_index": self.actions.ids(ep.action),
-            "segment.action_number": ep.action_number,
-        }
+        scalars = frame_columns(ep, t, i, self._frames, task_index, self.actions)
         arrays = {k: pa.FixedSizeListArray.from_arrays(pa.array(v.reshape(-1)), v.shape[1]) if v.shape[1] > 1
                   else pa.array(v.reshape(-1)) for k, v in cols.items()}  # shape [1]: a scalar column, as LeRobot reads it
         arrays |= {k: pa.array(v) for k, v in scalars.items()}
