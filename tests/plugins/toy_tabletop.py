@@ -68,7 +68,7 @@ SPEC = TaskSpec(
     description="toy plugin: the left arm picks the block up and holds it clear of the table (system B)",
     objects=("block",),
     instruction="Pick up the block with the left arm and hold it up.",
-    goal=("holding(left, block)", "lifted(block)"),
+    goal=("held_up(block)",),
     script=script,
     scorer=LiftScorer,
 )
