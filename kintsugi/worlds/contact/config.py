@@ -1,4 +1,6 @@
-"""Every parameter of system C's contact world and its six tasks, typed; `--set box.mass_kg=[0.2,0.4]`.
+"""Every parameter of system C's contact world, its six paper tasks and the sections a task declares, typed.
+
+`--set box.mass_kg=[0.2,0.4]` overrides one.
 
 Units: metres, kilograms, newtons, seconds; angles in degrees. World frame: the table top
 is the plane z = 0 and its front edge is at x = `table.edge_x_m`; the end effector works
@@ -8,9 +10,12 @@ above it. Every randomized quantity is a `Range`: the `none` condition uses its 
 
 from __future__ import annotations
 
-from pydantic import Field
+from typing import Literal
+
+from pydantic import Field, model_validator
 
 from kintsugi.core.config import Range, SimSection as BaseSim, StrictModel
+from kintsugi.worlds.contact.objects import COLOURS
 
 RGBA = tuple[float, float, float, float]
 
@@ -142,6 +147,89 @@ class BoxSection(StrictModel):
     y_m: Range
     yaw_deg: Range = (0.0, 0.0)
     rgba: RGBA = (0.85, 0.35, 0.15, 1.0)
+
+
+SHAPE_SIZES: dict[str, tuple[str, ...]] = {
+    "box": ("size_x", "size_y", "size_z"),
+    "cylinder": ("diameter", "length"),
+    "capsule": ("diameter", "length"),
+    "sphere": ("diameter",),
+    "board": ("plate_x", "plate_y", "handle_x", "handle_y", "thickness"),
+}
+"""What `ObjectSection.size_m` lists for each shape (full sizes, metres): a box's x, y, z; a cylinder's or
+capsule's diameter and length along its axis (a capsule's caps included); a sphere's diameter; a board (two
+parts: a flat plate and a handle along +x) its plate's x and y, its handle's x and y and its thickness."""
+
+
+class ObjectSection(StrictModel):
+    """One object a task declares: shape, what it is called and looks made of, sizes, mass, friction, start.
+
+    `label` and `material` are what the robot's scene description says of it ("red puck", "wood"): a user's
+    words, never its mass or friction (those are drawn from `mass_kg` and `friction`, the hidden truth)."""
+
+    shape: str = "box"
+    """One of `SHAPE_SIZES`: box, cylinder, capsule, sphere, board."""
+    label: str = ""
+    """What it is called ("wooden cylinder"); empty: the section's name."""
+    material: str = ""
+    """What it looks made of ("wood", "steel", "foam"); empty: not said."""
+    colour: str = ""
+    """A colour name (`kintsugi.worlds.contact.objects.COLOURS`: red, green, blue, ...) that sets `rgba`; empty:
+    `rgba` as given, no colour named."""
+    size_m: tuple[Range, ...]
+    """Full sizes, as `SHAPE_SIZES` lists them for the shape; each a range."""
+    axis: Literal["x", "y", "z"] = "z"
+    """A cylinder's or capsule's long axis: z stands it on its end, x or y lays it on its side."""
+    mass_kg: Range
+    friction: Range
+    x_m: Range
+    y_m: Range
+    yaw_deg: Range = (0.0, 0.0)
+    rgba: RGBA = (0.7, 0.7, 0.7, 1.0)
+
+    @model_validator(mode="after")
+    def _sizes(self) -> "ObjectSection":
+        if self.shape not in SHAPE_SIZES:
+            raise ValueError(f"unknown shape {self.shape!r}; known: {', '.join(SHAPE_SIZES)}")
+        names = SHAPE_SIZES[self.shape]
+        if self.size_m is not None and len(self.size_m) != len(names):
+            raise ValueError(f"a {self.shape}'s size_m lists {len(names)} ranges ({', '.join(names)}), "
+                             f"not {len(self.size_m)}")
+        if self.size_m is not None and any(r[0] <= 0 for r in self.size_m):
+            raise ValueError(f"size_m {self.size_m} has a non-positive size")
+        if self.colour:
+            if self.colour not in COLOURS:
+                raise ValueError(f"unknown colour {self.colour!r}; known: {', '.join(COLOURS)}")
+            object.__setattr__(self, "rgba", COLOURS[self.colour])
+        return self
+
+
+class FixtureSection(StrictModel):
+    """A static box a task declares (a wall, a post, an obstacle): full size, where its centre stands on the table."""
+
+    size_m: tuple[float, float, float]
+    x_m: Range
+    y_m: Range
+    label: str = ""
+    """What it is called ("grey post"); empty: the section's name."""
+    rgba: RGBA = (0.45, 0.45, 0.5, 1.0)
+
+    @model_validator(mode="after")
+    def _positive(self) -> "FixtureSection":
+        if min(self.size_m) <= 0:
+            raise ValueError(f"size_m {self.size_m} has a non-positive size")
+        return self
+
+
+class MarkerSection(StrictModel):
+    """A goal disc a task declares, painted on the table (no collisions)."""
+
+    x_m: Range
+    y_m: Range
+    radius_m: float = Field(gt=0)
+    label: str = ""
+    """What it is called ("green disc"); empty: the section's name."""
+    rgba: RGBA = (0.1, 0.8, 0.2, 0.45)
 
 
 class BoardSection(StrictModel):

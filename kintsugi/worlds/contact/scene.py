@@ -6,7 +6,8 @@ numbers, never in structure, so a state copies from one to the other index for i
 
 Frictions: MuJoCo lets the geom with the higher `priority` set a contact's friction.
 Finger pads (2) > objects (1) > table, walls (0), so an object's `friction` is exactly its
-friction against the table and walls, and a pinch always uses the pads' friction.
+friction against the table and walls, and a pinch always uses the pads' friction. Round parts
+(cylinder, sphere, capsule) also set their rolling and torsional resistance (condim 6).
 """
 
 from __future__ import annotations
@@ -22,6 +23,10 @@ ACTUATORS = ("x", "y", "z", "yaw", "grip")
 PALM_HALF_Z = 0.01
 EE_RGBA = "0.25 0.25 0.28 1"
 PAD_RGBA = "0.15 0.15 0.15 1"
+ROLLING_M = 0.001
+"""Rolling resistance (m) of a round part (cylinder, sphere, capsule) on the table: a pushed ball or lying
+cylinder rolls and comes to rest, as on a real table top, instead of rolling on for ever."""
+TORSION_M = 0.005
 
 
 def _f(*xs: float) -> str:
@@ -33,8 +38,11 @@ def _object_body(name: str, geo: Geometry, phys: Physics, place: Placement) -> s
     geoms = []
     for i, (part, vol) in enumerate(zip(geo.parts, geo.volumes)):
         gname = name if len(geo.parts) == 1 else f"{name}_{i}"
-        geoms.append(f'<geom name="{gname}" type="box" size="{_f(*part.half)}" pos="{_f(*part.pos)}" '
-                     f'mass="{phys.mass_kg * vol / total:.6g}" friction="{phys.friction:.6g} 0.005 0.0001" '
+        kind, size, turn = part.mjcf()
+        roll = "" if kind == "box" else f' condim="6" friction="{phys.friction:.6g} {TORSION_M:.6g} {ROLLING_M:.6g}"'
+        fric = "" if roll else f' friction="{phys.friction:.6g} 0.005 0.0001"'
+        geoms.append(f'<geom name="{gname}" type="{kind}" size="{size}"{turn} pos="{_f(*part.pos)}" '
+                     f'mass="{phys.mass_kg * vol / total:.6g}"{fric}{roll} '
                      f'priority="1" rgba="{_f(*geo.rgba)}"/>')
     return (f'<body name="{name}" pos="{_f(place.x, place.y, geo.rest_z)}" quat="{_f(*place.quat())}">'
             f'<freejoint name="{name}"/>{"".join(geoms)}</body>')

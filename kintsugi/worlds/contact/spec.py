@@ -7,7 +7,6 @@ like "pushed with 5 N for 2 s") and judges the end; it is never shown to a metho
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass
 from typing import Callable, Protocol
 
@@ -16,7 +15,7 @@ import numpy as np
 from kintsugi.core.config import StrictModel
 from kintsugi.worlds.contact.conditions import Drawer
 from kintsugi.worlds.contact.config import ContactConfig
-from kintsugi.worlds.contact.objects import Geometry, Physics
+from kintsugi.worlds.contact.objects import Geometry, Physics, box_corners
 from kintsugi.worlds.contact.world import EvaluationWorld, Scene, rotate
 
 
@@ -59,19 +58,19 @@ class ContactTaskDef:
 
 
 def corners(geo: Geometry) -> np.ndarray:
-    """(8 x parts, 3) box corners of an object in its own frame."""
-    out = []
-    for p in geo.parts:
-        for s in itertools.product((-1, 1), repeat=3):
-            out.append(np.asarray(p.pos) + np.asarray(s) * np.asarray(p.half))
-    return np.array(out)
+    """(8 x parts, 3) corners of each part's bounding box in the object's frame (a box's own corners)."""
+    return box_corners(geo)
 
 
 def lowest_z(world: EvaluationWorld, name: str) -> float:
-    """Height of an object's lowest corner above the table top (ground truth)."""
+    """Height of an object's lowest point above the table top (ground truth), as its shape gives it: a box's
+    lowest corner, a cylinder's rim, a sphere's or capsule's bottom."""
     pos, quat = world.object_pose(name)
-    pts = pos + rotate(np.broadcast_to(quat, (len(c := corners(world.scene.geometry[name])), 4)), c)
-    return float(pts[:, 2].min())
+    geo = world.scene.geometry[name]
+    if all(p.shape == "box" for p in geo.parts):
+        pts = pos + rotate(np.broadcast_to(quat, (len(c := corners(geo)), 4)), c)
+        return float(pts[:, 2].min())
+    return float(geo.lowest_z(pos, quat))
 
 
 def nominal(mass: tuple[float, float], friction: tuple[float, float]) -> Physics:

@@ -191,6 +191,20 @@ class EvaluationWorld(ContactWorld):
                     seen.add(f)
         return seen
 
+    def in_contact(self, name: str, other: str) -> bool:
+        """Ground truth: object `name` touches `other` (another object or a fixture, by name)."""
+        lay, m, d = self.layout, self.model, self.data
+        mine = set(lay.obj_geoms[name].tolist())
+        if other in lay.obj_geoms:
+            theirs = set(lay.obj_geoms[other].tolist())
+        else:
+            theirs = {resolve(m, mujoco.mjtObj.mjOBJ_GEOM, other)}
+        for i in range(d.ncon):
+            g1, g2 = int(d.contact[i].geom1), int(d.contact[i].geom2)
+            if (g1 in mine and g2 in theirs) or (g2 in mine and g1 in theirs):
+                return True
+        return False
+
     def object_pose(self, name: str) -> tuple[np.ndarray, np.ndarray]:
         a = self.layout.obj_qpos[name]
         return self.data.qpos[a:a + 3].copy(), self.data.qpos[a + 3:a + 7].copy()
