@@ -46,6 +46,18 @@ def _rim_start(p: np.ndarray, a: np.ndarray, depth: float, radius: float | None 
     return centre - depth * a
 
 
+def _level_axes(pca_axes: np.ndarray) -> list[np.ndarray]:
+    """Horizontal starts for a cylinder lying on its side: the level part of the cloud's two main directions
+    and the level direction across each (a cylinder about as long as it is wide has no telling main axis)."""
+    out = []
+    for k in (0, 1):
+        a = np.array([pca_axes[0, k], pca_axes[1, k], 0.0])
+        n = float(np.linalg.norm(a))
+        if n > 1e-6:
+            out += [a / n, np.array([-a[1], a[0], 0.0]) / n]
+    return out
+
+
 def _cylinder_attempt(
     p: np.ndarray,
     radius: float,
@@ -124,6 +136,7 @@ def fit_primitive(
         likely = (pca_axes[:, 2], UP, pca_axes[:, 0]) if squat else (pca_axes[:, 0], UP, pca_axes[:, 1], pca_axes[:, 2])
         if wall is not None:  # a container most likely stands
             likely = (UP, *likely)
+        likely = (*likely, *_level_axes(pca_axes))  # lying: a squat one's principal axes need not show its axis
         axes: list[np.ndarray] = []
         for a in likely:  # a squat cylinder (plate) is thinnest along its axis, a long one longest
             if all(abs(a @ b) < 0.95 for b in axes):

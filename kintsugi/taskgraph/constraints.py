@@ -212,28 +212,47 @@ class Above(_Template):
 
 
 class InRegion(_Template):
-    """Point inside the box [lo, hi]: the largest per-axis excursion outside it (negative inside)."""
+    """Point inside the box [lo, hi]: the largest per-axis excursion outside it (negative inside).
+
+    A region placed beside an object (`beside_left(plate)`) names it as its `anchor`, with `anchor_at`, the
+    anchor's centroid (x, y) where the box was placed: the box rides with the anchor, shifted in x-y by how far
+    its perceived centroid has moved since (NaN while the anchor is not perceived)."""
 
     kind: Literal["in_region"] = "in_region"
     point: Point
     lo: Vec3
     hi: Vec3
+    anchor: Name | None = None
+    anchor_at: tuple[Num, Num] | None = None
 
     @model_validator(mode="after")
     def _ordered(self) -> "InRegion":
         if any(l > h for l, h in zip(self.lo, self.hi)):
             raise ValueError(f"region lo {self.lo} exceeds hi {self.hi} on some axis")
+        if (self.anchor is None) != (self.anchor_at is None):
+            raise ValueError("give `anchor` and `anchor_at` together (the object the region rides with, and where "
+                             "it was when the region was placed)")
         return self
 
+    def shift(self, f: Features) -> tuple[float, float] | None:
+        """How far (x, y) the anchor has moved since the region was placed; (0, 0) without one, None unseen."""
+        if self.anchor is None or self.anchor_at is None:
+            return (0.0, 0.0)
+        c = Point(entity=self.anchor).read(f)
+        return None if c is None else (c[0] - self.anchor_at[0], c[1] - self.anchor_at[1])
+
     def evaluate(self, f: Features) -> float:
-        p = self.point.read(f)
-        if p is None:
+        p, d = self.point.read(f), self.shift(f)
+        if p is None or d is None:
             return NAN
         lo, hi = self.lo, self.hi
-        return max(lo[0] - p[0], p[0] - hi[0], lo[1] - p[1], p[1] - hi[1], lo[2] - p[2], p[2] - hi[2])
+        return max(lo[0] + d[0] - p[0], p[0] - hi[0] - d[0], lo[1] + d[1] - p[1], p[1] - hi[1] - d[1],
+                   lo[2] - p[2], p[2] - hi[2])
 
     def refs(self):
         yield from self.point.refs()
+        if self.anchor is not None:
+            yield (self.anchor, "point", None)
 
 
 class Offset(_Template):

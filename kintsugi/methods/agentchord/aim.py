@@ -40,3 +40,21 @@ def relation_call(node: Node, robot: Any, seen: dict[str, tuple[float, float]], 
     if onto and top is not None:
         out["z_offset"] = round(max(0.0, float(top[2])), 4)
     return out
+
+
+def region_call(node: Node, robot: Any, call: dict) -> dict:
+    """A place into a region that rides with another object (the target node's anchored `in_region` on the held
+    object: "to the left of the plate"), shifted by how far that object is perceived to have moved since the
+    region was placed. Unchanged when it moved less than RE_AIM_M, or is not seen."""
+    held = {k for k, n in robot.arm_state(call["arm"]).touching.items() if n == 2}
+    for c in node.constraints:
+        if c.kind != "in_region" or c.anchor is None or c.point.entity not in held or c.anchor in held:
+            continue
+        f = robot.features({c.anchor}).get(c.anchor)
+        if f is None or not f.visible or f.centroid is None:
+            return call
+        dx, dy = float(f.centroid[0]) - c.anchor_at[0], float(f.centroid[1]) - c.anchor_at[1]
+        if np.hypot(dx, dy) < RE_AIM_M:
+            return call
+        return {**call, "x": round(call["x"] + dx, 4), "y": round(call["y"] + dy, 4)}
+    return call

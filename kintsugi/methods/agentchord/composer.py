@@ -38,6 +38,14 @@ class GoalHolds(PlanningError):
     """Planning found nothing to do: the observed scene already satisfies the goal."""
 
 
+def record_goal_holds(records: list) -> None:
+    """A re-plan that found the goal already holding is an answer, not a reasoner error: its transcript record
+    (the last one, which the composer's GoalHolds marked failed) keeps the finding as its reply instead."""
+    if records and (records[-1].error or "").startswith(f"{GoalHolds.__name__}:"):
+        finding = records[-1].error.split(":", 1)[1].strip()
+        records[-1] = records[-1].model_copy(update={"error": None, "reply": {"goal_holds": finding}})
+
+
 def build_graph(task: str, domain: Domain, initial: State, steps: list[GroundOp],
                 seen: dict[str, SeenObject], goal: frozenset[Atom] = frozenset(), where: Any = None) -> ComposerReply:
     """A chain graph start -> s1 -> ... -> goal from a plan, with the symbolic state of every node. The goal
@@ -164,5 +172,5 @@ def ask_compose(reasoner: Any, request: ComposerRequest, vocabulary: Vocabulary)
     return out["graph"], reply
 
 
-__all__ = ["COMPOSER", "GoalHolds", "NotUnderstood", "ask_compose", "check_composition", "check_goal",
+__all__ = ["COMPOSER", "GoalHolds", "NotUnderstood", "record_goal_holds", "ask_compose", "check_composition", "check_goal",
            "embedded_compose", "observed_facts", "read_instruction", "PlanningError"]

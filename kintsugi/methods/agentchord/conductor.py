@@ -29,7 +29,6 @@ from rich.markup import escape
 
 from kintsugi.core.log import TrialLog
 from kintsugi.core.record import SkillLog
-from kintsugi.methods.agentchord.anchors import stale_regions
 from kintsugi.methods.agentchord.conducting import ConductorConfig, ConductorError, Metrics, objects_of, proprioceptive
 from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes
 from kintsugi.methods.agentchord.observe import ARMS, features
@@ -364,7 +363,4 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
         if bad or unknown:
             self.log.event(self.robot.sim_time, "goal check", f"goal {goal.id!r}: violated {', '.join(bad) or '-'}; "
                            f"undecided {', '.join(unknown) or '-'}")
-        stale = stale_regions(goal, self.synthesis.seen, self.synthesis.taken, self.robot.features(set(self.synthesis.seen)))
-        if stale and not bad:
-            self.log.event(self.robot.sim_time, "goal check", f"not judged a success: {'; '.join(stale)}")
-        return not bad and not stale and self.pours_done()
+        return not bad and not unknown and self.pours_done()  # undecided is not a success

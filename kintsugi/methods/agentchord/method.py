@@ -129,7 +129,7 @@ class AgentChord:
         """The conductor's fallback: compose and arrange again from the current observation (remembering the first
         one's static facts), for the goal the composer read from the instruction (`read`) less the pours already
         seen done; None when the goal already holds."""
-        from kintsugi.methods.agentchord.composer import GoalHolds
+        from kintsugi.methods.agentchord.composer import GoalHolds, record_goal_holds
 
         def replan() -> Any:
             done = {f"poured({o}, {c})" for (o, c), ok in conductor.pours.items() if ok}
@@ -140,6 +140,7 @@ class AgentChord:
                                          goal=goal if len(goal) < len(read) else None,
                                          cfg=self.ctx.cfg, first=first)
             except GoalHolds:
+                record_goal_holds(reasoner.records)
                 return None
             conductor.tops.observe(obs.objects)
             return compiled.graph

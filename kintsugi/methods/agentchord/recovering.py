@@ -34,7 +34,7 @@ class Recovering:
             self.wait_still(arm, names | objects_of(failed), failed)
         f = self._read(names)
         for n in reversed(upto):
-            if all(not c.evaluate(f) > 0.0 for c in self.graph.node(n).constraints):
+            if all(c.evaluate(f) <= 0.0 for c in self.graph.node(n).constraints):  # NaN (undecided) does not hold
                 self.log.event(self.robot.sim_time, "backtrack", f"{firing.failure_mode} on {failed.id}: back to {n!r}")
                 self.log.transition(failed.id, f"backtrack:{n}")
                 return n

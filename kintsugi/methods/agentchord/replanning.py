@@ -29,7 +29,7 @@ from kintsugi.methods.agentchord.symbolic import PlanningError
 from kintsugi.methods.agentchord.method import LatencySettings, RunFigures
 from kintsugi.methods.agentchord.observe import seen_arms, seen_objects
 from kintsugi.methods.agentchord.tops import Heads, Tops
-from kintsugi.methods.agentchord.composer import GoalHolds
+from kintsugi.methods.agentchord.composer import GoalHolds, record_goal_holds
 from kintsugi.methods.agentchord.types import VerifyRequest
 from kintsugi.methods.agentchord.verifier import ask_verify
 from kintsugi.taskgraph.model import Edge, TaskGraph
@@ -74,6 +74,7 @@ class Replanning:
                 except GoalHolds:
                     if attempt == 0:
                         raise
+                    record_goal_holds(self.reasoner.records)
                     log.event(robot.sim_time, "replan", "the composer finds the goal already holds")
                     ok = True
                     break

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 
-from kintsugi.methods.agentchord.aim import relation_call
+from kintsugi.methods.agentchord.aim import region_call, relation_call
 from kintsugi.methods.agentchord.keyframes import TabletopKeyframes
 from kintsugi.methods.agentchord.observe import ARMS
 from kintsugi.methods.agentchord.tops import Heads, Tops
@@ -74,7 +74,8 @@ class EdgeSynthesis:
             if call.get("yaw_deg") is None:
                 call = self._clear_grasp_call(call)
         if name == "place":
-            call = relation_call(self.graph.node(edge.target), self.robot, self.seen, self._place_call(call))
+            target = self.graph.node(edge.target)
+            call = region_call(target, self.robot, relation_call(target, self.robot, self.seen, self._place_call(call)))
         return call
 
     def _place_call(self, call: dict) -> dict:
@@ -368,5 +369,10 @@ class EdgeSynthesis:
             if c.kind != "in_region" or c.point.feature is not None or c.point.along is not None:
                 continue
             if c.point.entity in (held or set()):
-                return c.point.entity, region_centre(c)
+                x, y = region_centre(c)
+                if c.anchor is not None:  # the region rides with its anchor: where that is perceived now
+                    f = self.robot.features({c.anchor}).get(c.anchor)
+                    if f is not None and f.visible and f.centroid is not None:
+                        x, y = x + f.centroid[0] - c.anchor_at[0], y + f.centroid[1] - c.anchor_at[1]
+                return c.point.entity, (x, y)
         return None

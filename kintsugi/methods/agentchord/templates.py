@@ -11,6 +11,7 @@ from kintsugi.methods.agentchord.symbolic import Atom, GroundOp, PlanningError
 from kintsugi.methods.agentchord.types import Domain, SeenObject
 
 _FN = re.compile(r"^\$(x|y|z|top|hy|nhy|rx|ry|yaw|mirror|thin)\(\s*(\?[A-Za-z0-9_]+)\s*(?:,\s*(-?[0-9.eE+-]+)\s*)?\)$")
+_PLACE_FN = re.compile(r"([A-Za-z][A-Za-z0-9_]*)\(([A-Za-z][A-Za-z0-9_]*)\)")
 _FN2 = re.compile(r"^\$(dx|dy|turn)\(\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*,\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*\)$")
 
 
@@ -111,10 +112,26 @@ def node_constraints(domain: Domain, atoms: list[Atom], seen: dict[str, SeenObje
         spec = specs[a[0]]
         b = _positional({}, a[1:])
         cs = [c for c in spec.constraints if not (a[0] == "holding" and a[2] in shared and c.get("kind") == "detached")]
-        constraints += [fill(c, b, seen, where) for c in cs]
+        filled = [fill(c, b, seen, where) for c in cs]
+        anchor = _anchor(a[2], domain, seen) if a[0] == "in_region" and len(a) == 3 else None
+        if anchor is not None:  # a region beside an object rides with it
+            filled = [{**c, "anchor": anchor[0], "anchor_at": anchor[1]} if c.get("kind") == "in_region" else c
+                      for c in filled]
+        constraints += filled
         if spec.gripper is not None and spec.params and spec.params[0] == "arm":
             gripper[a[1]] = spec.gripper
     return constraints, gripper
+
+
+def _anchor(place: str, domain: Domain, seen: dict[str, SeenObject]) -> tuple[str, list[float]] | None:
+    """(object, its perceived x-y) of a place given relative to an object (`beside_left(plate)`), else None."""
+    m = _PLACE_FN.fullmatch(place)
+    if m is None or m.group(1) not in domain.relative_places:
+        return None
+    o = seen.get(m.group(2))
+    if o is None or o.centroid is None:
+        return None
+    return m.group(2), [round(float(o.centroid[0]), 4), round(float(o.centroid[1]), 4)]
 
 
 def _held_by_two(atoms: list[Atom]) -> set[str]:

@@ -1,8 +1,9 @@
 """Task `coffee-tray`: put the coffee capsule into the tray, then carry the tray forward with both
 arms (paper, appendix B).
 
-Success at the end: the capsule stands upright on the tray's floor, inside its rims; the tray
-lies flat on the table with its centre in `targets.tray_forward`; both are at rest and released.
+Success at the end: the capsule stands upright (on either end: nothing tells them apart) on the tray's floor,
+inside its rims; the tray lies flat on the table with its centre in `targets.tray_forward`; both are at rest
+and released.
 """
 
 from __future__ import annotations
@@ -97,7 +98,7 @@ class CoffeeScorer:
         floor_z = -tray.half_extents[2] + TRAY_WALL + cap.half_height  # capsule centre on the floor, tray frame
         d = CoffeeDetails(
             capsule_in_tray=bool(np.all(np.abs(rel[:2]) <= inner) and abs(rel[2] - floor_z) <= 0.005),
-            capsule_upright=upright(truth, "capsule", sc.upright_tol_deg),
+            capsule_upright=upright(truth, "capsule", sc.upright_tol_deg, cap),
             capsule_offset_m=tuple(round(float(v), 4) for v in rel),
             tray_in_region=in_region(self.cfg, "tray_forward", truth, "tray"),
             tray_offset_m=tuple(round(float(v), 4) for v in np.array(t.pos[:2])

@@ -2,8 +2,9 @@
 
 One file: the three declared objects (two cans, upright cylinders taken side-on; a box that stays where it
 is), the instruction and goal, the ground-truth scorer (each can 6-28 cm to its side of the box's centre,
-within 8 cm of it front to back, standing, released, at rest; the box not pushed off its place) and the
-scripted reference sequence (each arm places the can on its own side).
+within 8 cm of it front to back, standing on the table, released, at rest: what the instruction asks, and
+nothing about the box's own pose, which it does not mention) and the scripted reference sequence (each arm
+places the can on its own side).
 """
 
 from __future__ import annotations
@@ -52,7 +53,7 @@ SPEC = TaskSpec(
     scorer=goal_scorer(("left_of", "green_can", "box"), ("right_of", "yellow_can", "box"),
                        ("upright", "green_can"), ("upright", "yellow_can"), ("on_table", "green_can"),
                        ("on_table", "yellow_can"), ("released", "green_can"), ("released", "yellow_can"),
-                       ("at_rest", "green_can"), ("at_rest", "yellow_can"), ("flat", "box")),
+                       ("at_rest", "green_can"), ("at_rest", "yellow_can")),
     shift=("box", (0, 1)),
     knock=("green_can", (0, 0)),
 )

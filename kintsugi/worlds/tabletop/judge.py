@@ -16,7 +16,7 @@ from scipy.spatial.transform import Rotation
 from kintsugi.core.config import StrictModel
 from kintsugi.worlds.tabletop.config import TabletopConfig
 from kintsugi.worlds.tabletop.objects import Shape, shape_of
-from kintsugi.worlds.tabletop.spec import held
+from kintsugi.worlds.tabletop.spec import held, upright
 from kintsugi.worlds.tabletop.world import GroundTruth, TabletopWorld
 
 ON_GAP_M = 0.015
@@ -71,10 +71,6 @@ def over_footprint(truth: GroundTruth, obj: str, base: str, shape: Shape, margin
     return bool(abs(d[0]) <= he[0] - margin and abs(d[1]) <= he[1] - margin)
 
 
-def tilt_deg(truth: GroundTruth, obj: str) -> float:
-    return float(truth.objects[obj].tilt_deg)
-
-
 def rests_flat(truth: GroundTruth, obj: str, tol_deg: float) -> bool:
     """A box rests on any face (one of its axes vertical); a round object lies with its axis level or stands."""
     m = _frame(truth, obj)
@@ -113,7 +109,7 @@ class GoalScorer:
             return BESIDE_M[0] <= d <= BESIDE_M[1] and lowest(truth, x, shape[x]) <= TABLE_Z_M
         (x,) = args
         if name == "upright":
-            return tilt_deg(truth, x) <= sc.upright_tol_deg
+            return upright(truth, x, sc.upright_tol_deg, shape[x])
         if name == "flat":
             return rests_flat(truth, x, sc.upright_tol_deg)
         if name == "on_table":

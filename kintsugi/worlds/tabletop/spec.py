@@ -13,13 +13,16 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Callable, Mapping, Protocol
+from typing import TYPE_CHECKING, Any, Callable, Mapping, Protocol
 
 import numpy as np
 
 from kintsugi.core.config import StrictModel
 from kintsugi.worlds.tabletop.config import ObjectSection, Region, TabletopConfig
 from kintsugi.worlds.tabletop.world import GroundTruth, TabletopWorld
+
+if TYPE_CHECKING:
+    from kintsugi.worlds.tabletop.objects import Shape
 
 
 class Scorer(Protocol):
@@ -60,8 +63,16 @@ class TaskSpec:
 
 # --- ground-truth predicates shared by the tasks' scorers ------------------------
 
-def upright(truth: GroundTruth, obj: str, tol_deg: float) -> bool:
-    return truth.objects[obj].tilt_deg <= tol_deg
+def upright(truth: GroundTruth, obj: str, tol_deg: float, shape: "Shape | None" = None) -> bool:
+    """Standing within tol_deg of vertical. With its `shape` given, a solid object whose two ends nothing tells
+    apart (no painted cap, no opening: a can, a capsule, a cube) stands upright on either end."""
+    tilt = truth.objects[obj].tilt_deg
+    return tilt <= tol_deg or (shape is not None and end_free(shape) and tilt >= 180.0 - tol_deg)
+
+
+def end_free(shape: "Shape") -> bool:
+    """Its two ends look and behave alike: turned end over end it is the same object in the same pose."""
+    return shape.kind != "sphere" and not shape.cap and shape.wall is None
 
 
 def on_table(truth: GroundTruth, obj: str, rest_height: float, tol_m: float = 0.005) -> bool:
