@@ -86,6 +86,8 @@ class KintsugiEnv(gym.Env):
         opts = {"period_s": self.period_s, "perceived": self.perceived} if self.task.system == "tabletop" else {}
         self.driver = driver_for(self.episode.robot, **opts)
         self.seed_used = seed
+        self._ids = {"task": self.task_name, "variant": self.variant, "condition": self.condition, "seed": seed}
+        self._t_end = self.max_seconds - 1e-9
         self._succeeded = False
         self._last_action: np.ndarray | None = None
 
@@ -98,36 +100,43 @@ class KintsugiEnv(gym.Env):
 
     def step(self, action: Any):  # noqa: ANN201
         d = self.driver
-        a = np.asarray(action, dtype=np.float64)
-        d.apply(a)
+        d.apply(action)
         error = None
         try:
             d.tick()
         except KintsugiError as exc:
             error = f"{type(exc).__name__}: {exc}"
-        truncated = d.sim_time >= self.max_seconds - 1e-9
+        t = d.sim_time
+        truncated = t >= self._t_end
         reward = 0.0
-        if error is None and (d.steps % self.score_every == 0 or truncated) and not self._succeeded:
+        if error is None and not self._succeeded and (truncated or d.steps % self.score_every == 0):
             if bool(self.episode.score()[0]):
                 self._succeeded = True
                 reward = 1.0
         if self.reward_kind == "shaped":
-            a = d.clip(a)
-            if self._last_action is not None:
-                span = np.maximum(d.action_high - d.action_low, 1e-9)
-                reward -= self.shaped_scale * float(np.abs((a - self._last_action) / span).mean())
-            self._last_action = a
+            reward -= self._change(d.clip(action))
         terminated = self._succeeded or error is not None
         obs = d.observe(self.images) if error is None else self._zeros()
-        return obs, reward, terminated, truncated and not terminated, self._info() | ({"error": error} if error else {})
+        info = {**self._ids, "success": self._succeeded, "sim_time": t, "physics_steps": d.physics_steps,
+                "steps": d.steps}
+        if error is not None:
+            info["error"] = error
+        return obs, reward, terminated, truncated and not terminated, info
+
+    def _change(self, a: np.ndarray) -> float:
+        """The shaped term: `shaped_scale` x the mean normalised change of the action since the last step."""
+        last, self._last_action = self._last_action, a
+        if last is None:
+            return 0.0
+        span = np.maximum(self.driver.action_high - self.driver.action_low, 1e-9)
+        return self.shaped_scale * float(np.abs((a - last) / span).mean())
 
     def _zeros(self) -> dict[str, np.ndarray]:
         return {k: np.zeros(s.shape, dtype=s.dtype) for k, s in self.observation_space.spaces.items()}
 
     def _info(self) -> dict[str, Any]:
         d = self.driver
-        return {"task": self.task_name, "variant": self.variant, "condition": self.condition, "seed": self.seed_used,
-                "success": self._succeeded, "sim_time": round(d.sim_time, 6), "physics_steps": d.physics_steps,
+        return {**self._ids, "success": self._succeeded, "sim_time": d.sim_time, "physics_steps": d.physics_steps,
                 "steps": d.steps}
 
     def render(self) -> np.ndarray | None:

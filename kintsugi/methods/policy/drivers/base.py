@@ -22,6 +22,8 @@ import numpy as np
 
 from kintsugi.core.errors import KintsugiError
 
+INF = math.inf
+
 
 class DriverError(KintsugiError):
     """The robot cannot be driven step by step (an unknown family, a bad action)."""
@@ -47,7 +49,7 @@ class Driver(ABC):
     def __init__(self) -> None:
         self.steps = 0
         """Control periods this driver ran."""
-        self._last_quat: dict[str, np.ndarray] = {}
+        self._last_quat: dict[str, list[float]] = {}
 
     # --- the action ---------------------------------------------------------------------------
     @property
@@ -65,19 +67,27 @@ class Driver(ABC):
         """The action clipped to the bounds, as floats (plain Python: this runs every control period, and numpy
         calls on a handful of values cost more than the physics of a light world)."""
         try:
-            vals = [float(v) for v in (action.reshape(-1) if isinstance(action, np.ndarray) else action)]
+            if isinstance(action, np.ndarray):
+                if action.dtype.kind not in "fiub":
+                    raise TypeError(action.dtype)
+                vals = action.ravel().tolist()
+            else:
+                vals = [float(v) for v in action]
         except (TypeError, ValueError):
             raise DriverError(f"a {self.family} action is a sequence of {len(self.action_names)} numbers "
                               f"({', '.join(self.action_names)}), not {action!r}") from None
-        if len(vals) != len(self.action_names):
-            raise DriverError(f"a {self.family} action has {len(self.action_names)} values "
-                              f"({', '.join(self.action_names)}), not {len(vals)}")
-        if not all(math.isfinite(v) for v in vals):
-            raise DriverError(f"a {self.family} action must be finite, got {vals}")
         bounds = self._bounds
         if bounds is None:
             bounds = self._bounds = (self.action_low.tolist(), self.action_high.tolist())
-        return [lo if v < lo else hi if v > hi else v for v, lo, hi in zip(vals, *bounds)]
+        if len(vals) != len(bounds[0]):
+            raise DriverError(f"a {self.family} action has {len(self.action_names)} values "
+                              f"({', '.join(self.action_names)}), not {len(vals)}")
+        out = []
+        for v, lo, hi in zip(vals, *bounds):
+            if not -INF < v < INF:  # NaN or infinite
+                raise DriverError(f"a {self.family} action must be finite, got {vals}")
+            out.append(lo if v < lo else hi if v > hi else float(v))
+        return out
 
     _bounds: tuple[list[float], list[float]] | None = None
 
@@ -122,9 +132,12 @@ class Driver(ABC):
         """`quat` on the hemisphere of the last one seen under `key` (q and -q are one rotation; a sign flip
         between frames ruins normalisation statistics and regression targets). The first is given w >= 0
         (`w_index`: where the scalar part is, 3 for x, y, z, w and 0 for w, x, y, z)."""
-        q = np.asarray(quat, dtype=np.float64)
+        return np.array(self.continuous_values(key, np.asarray(quat, dtype=np.float64).tolist(), w_index))
+
+    def continuous_values(self, key: str, q: list[float], w_index: int) -> list[float]:
+        """`continuous` on plain floats (the observation's hot path)."""
         ref = self._last_quat.get(key)
-        if (ref is None and q[w_index] < 0) or (ref is not None and q @ ref < 0):
-            q = -q
+        if (q[w_index] < 0) if ref is None else (q[0] * ref[0] + q[1] * ref[1] + q[2] * ref[2] + q[3] * ref[3] < 0):
+            q = [-v for v in q]
         self._last_quat[key] = q
         return q

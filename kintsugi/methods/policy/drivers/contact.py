@@ -40,6 +40,18 @@ class ContactDriver(Driver):
             raise DriverError(f"the contact effector has {len(rng)} actuators, the driver knows {len(ACTION_NAMES)}")
         self._low, self._high = rng[:, 0].copy(), rng[:, 1].copy()
         self.objects = tuple(self.world.layout.objects)
+        lay = self.world.layout
+        self._qidx = np.concatenate([lay.ee_qpos, lay.finger_qpos,
+                                     *(np.arange(lay.obj_qpos[k], lay.obj_qpos[k] + 7) for k in self.objects)])
+        self._vidx = np.concatenate([lay.ee_dof, lay.finger_dof,
+                                     *(np.arange(lay.obj_dof[k], lay.obj_dof[k] + 6) for k in self.objects)])
+        s = lay.sensors
+        self._sidx = np.concatenate([np.arange(s[k].start, s[k].stop) for k in ("ft_force", "ft_torque")]
+                                    + [[s["touch_l"].start, s["touch_r"].start]])
+        self._hand_weight = lay.hand_weight_n
+        d = self.world.data
+        self._ctrl, self._qpos, self._qvel, self._sens = d.ctrl, d.qpos, d.qvel, d.sensordata
+        """Index arrays resolved once (what `robot.observe` reads): one gather per source each step."""
 
     @property
     def action_low(self) -> np.ndarray:
@@ -50,7 +62,7 @@ class ContactDriver(Driver):
         return self._high
 
     def apply(self, action: Any) -> None:
-        self.world.data.ctrl[:] = self.clip_values(action)
+        self._ctrl[:] = self.clip_values(action)
 
     def command(self) -> np.ndarray:
         return self.world.data.ctrl.copy()
@@ -102,14 +114,21 @@ class ContactDriver(Driver):
         return f
 
     def observe(self, images: bool = True) -> dict[str, np.ndarray]:
-        o = self.robot.observe()
-        out = {"ee": o.ee, "ee_vel": o.ee_vel, "fingers": o.fingers, "finger_vel": o.finger_vel,
-               "force": np.asarray(o.force, dtype=np.float64), "torque": o.torque, "touch": o.touch}
-        for name, tr in o.objects.items():
-            out[f"{name}_pos"] = tr.pos
-            out[f"{name}_quat"] = self.continuous(name, tr.quat, 0)
-            out[f"{name}_lin_vel"] = tr.lin_vel
-            out[f"{name}_ang_vel"] = tr.ang_vel
+        """What `robot.observe()` gives (proprioception, the tared wrist force, the pads, the pose tracker's
+        objects), read with index arrays resolved once: one gather per source, entries are views of it."""
+        q, v, sens = self._qpos[self._qidx], self._qvel[self._vidx], self._sens[self._sidx]
+        yaw = q[3]
+        c, s = np.cos(yaw), np.sin(yaw)
+        rx, ry, rz = sens[0], sens[1], sens[2]  # tared_force_world: the hand frame's pull, rotated to the world
+        out = {"ee": q[0:4], "ee_vel": v[0:4], "fingers": q[4:6], "finger_vel": v[4:6],
+               "force": np.array([c * rx - s * ry, s * rx + c * ry, rz - self._hand_weight]),
+               "torque": sens[3:6], "touch": sens[6:8]}
+        for k, name in enumerate(self.objects):
+            a, b = 6 + 7 * k, 6 + 6 * k
+            out[f"{name}_pos"] = q[a:a + 3]
+            out[f"{name}_quat"] = np.array(self.continuous_values(name, q[a + 3:a + 7].tolist(), 0))
+            out[f"{name}_lin_vel"] = v[b:b + 3]
+            out[f"{name}_ang_vel"] = v[b + 3:b + 6]
         if images:
             out["image"] = self.render()
         return out

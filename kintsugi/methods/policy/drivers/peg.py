@@ -40,6 +40,9 @@ class PegDriver(Driver):
         self.control_hz = 1.0 / dt
         self._v_lin = ctl.speed_mm_s * 1e-3 * dt
         self._v_rot = math.radians(ctl.rot_speed_deg_s) * dt
+        mocap = self.world._mocap
+        self._mpos, self._mquat = self.world.data.mocap_pos[mocap], self.world.data.mocap_quat[mocap]
+        """Views of the wrist base's commanded pose (what `world.base_pose` reads), read as floats each step."""
 
     @property
     def action_low(self) -> np.ndarray:
@@ -51,13 +54,19 @@ class PegDriver(Driver):
 
     def apply(self, action: Any) -> None:
         y1, z1, r1 = self.clip_values(action)
-        y, z, r = self.world.base_pose().tolist()
+        y, z, r = self._pose()
         dist = math.hypot(y1 - y, z1 - z)
         if dist > self._v_lin * SLACK:
             y1, z1 = y + (y1 - y) * self._v_lin / dist, z + (z1 - z) * self._v_lin / dist
         if abs(r1 - r) > self._v_rot * SLACK:
             r1 = r + math.copysign(self._v_rot, r1 - r)
-        self.world.set_base(np.array((y1, z1, r1)))
+        self.world.set_base((y1, z1, r1))
+
+    def _pose(self) -> tuple[float, float, float]:
+        """`world.base_pose()` as floats, without building an array."""
+        _, y, z = self._mpos.tolist()
+        qw, qx, _, _ = self._mquat.tolist()
+        return y, z, 2 * math.atan2(qx, qw)
 
     def command(self) -> np.ndarray:
         return self.world.base_pose()
@@ -88,7 +97,7 @@ class PegDriver(Driver):
         return out
 
     def observe(self, images: bool = True) -> dict[str, np.ndarray]:
-        obs = {"base_pose": self.world.base_pose(), "wrist_force": np.array([self.robot.wrist_force_z()])}
+        obs = {"base_pose": np.array(self._pose()), "wrist_force": np.array([self.robot.wrist_force_z()])}
         if images:
             obs["image"] = self.world.render()
         return obs

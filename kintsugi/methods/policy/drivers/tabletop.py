@@ -62,6 +62,20 @@ class TabletopDriver(Driver):
             highs += [*rng[:, 1], 1.0]
         self._low, self._high = np.array(lows), np.array(highs)
         self._full = self.cfg.robot.gripper_max_opening_m
+        ids = [self.world.arms[arm] for arm in ARMS]
+        self._act = np.concatenate([i.act for i in ids])
+        self._qidx = np.concatenate([*(i.qpos for i in ids), *(i.finger_qpos for i in ids)])
+        self._sites = np.array([i.tcp for i in ids])
+        self._site_ids = [int(i.tcp) for i in ids]
+        self._grip_act = [int(i.grip_act) for i in ids]
+        d = self.world.data
+        self._ctrl, self._qpos, self._xpos, self._xmat = d.ctrl, d.qpos, d.site_xpos, d.site_xmat
+        """Views of the MjData buffers (fixed for the world's life), without a binding call per read."""
+        self._wxyz = np.empty(4)
+        self._keys = [tuple(f"{arm}_{k}" for k in ("joint_pos", "eef_pos", "eef_quat", "gripper_opening", "pad_force"))
+                      for arm in ARMS]
+        self._pads = {g: k for k, i in enumerate(ids) for g in i.pads}
+        """Index arrays resolved once: both arms' joint actuators, joint and finger qpos, tool sites, pad geoms."""
 
     @property
     def action_low(self) -> np.ndarray:
@@ -72,11 +86,15 @@ class TabletopDriver(Driver):
         return self._high
 
     def apply(self, action: Any) -> None:
-        a = self.clip(action)
+        a = self.clip_values(action)
+        w = self.world
+        ctrl = self._ctrl
+        ctrl[self._act] = a[0:6] + a[7:13]  # world.set_joint_targets for both arms at once
         for i, arm in enumerate(ARMS):
-            part = a[7 * i:7 * i + 7]
-            self.world.set_joint_targets(arm, part[:6])
-            self.world.set_grip_travel(arm, float(part[6]) * self._full)
+            travel = a[7 * i + 6] * self._full
+            # set_grip_travel unless it would change nothing (the same travel, already in force or held open)
+            if travel != w._grip_ctrl[arm] or (arm not in w._forced_open and ctrl[self._grip_act[i]] != travel):
+                w.set_grip_travel(arm, travel)
 
     def command(self) -> np.ndarray:
         out: list[float] = []
@@ -135,17 +153,30 @@ class TabletopDriver(Driver):
         return out
 
     def observe(self, images: bool = True) -> dict[str, np.ndarray]:
+        """The sensors as the world's own readers give them (`joint_positions`, `tcp_pose`, `gripper_opening`,
+        `pad_contacts`' force), read with index arrays resolved once and one gather per source."""
         w = self.world
+        q = self._qpos[self._qidx]
+        pos = self._xpos[self._sites]
+        forces = self.pad_forces()
+        wxyz = self._wxyz
+        scalars: list[float] = []
+        for k, arm in enumerate(ARMS):
+            mujoco.mju_mat2Quat(wxyz, self._xmat[self._site_ids[k]])
+            qw, qx, qy, qz = wxyz.tolist()
+            scalars += self.continuous_values(arm, [qx, qy, qz, qw], 3)
+        fingers = q[12:16].tolist()
+        for k in range(len(ARMS)):
+            scalars += (self._full - (fingers[2 * k] + fingers[2 * k + 1]), forces[k])
+        sv = np.array(scalars)  # per arm the quaternion (4), then per arm the opening and the pad force
         obs: dict[str, np.ndarray] = {}
-        for arm in ARMS:
-            pos, rot = w.tcp_pose(arm)
-            obs[f"{arm}_joint_pos"] = w.joint_positions(arm)
-            obs[f"{arm}_eef_pos"] = pos
-            wxyz = np.empty(4)
-            mujoco.mju_mat2Quat(wxyz, rot.reshape(-1))
-            obs[f"{arm}_eef_quat"] = self.continuous(arm, wxyz[[1, 2, 3, 0]], 3)
-            obs[f"{arm}_gripper_opening"] = np.array([w.gripper_opening(arm)])
-            obs[f"{arm}_pad_force"] = np.array([w.pad_contacts(arm)[1]])
+        n = len(ARMS)
+        for k, (kj, kp, kq, ko, kf) in enumerate(self._keys):
+            obs[kj] = q[6 * k:6 * k + 6]
+            obs[kp] = pos[k]
+            obs[kq] = sv[4 * k:4 * k + 4]
+            obs[ko] = sv[4 * n + 2 * k:4 * n + 2 * k + 1]
+            obs[kf] = sv[4 * n + 2 * k + 1:4 * n + 2 * k + 2]
         if self.perceived:
             for name, f in self.robot.features().items():
                 seen = f.visible and f.centroid is not None
@@ -156,6 +187,28 @@ class TabletopDriver(Driver):
             for cam in CAMERAS:
                 obs[f"image_{cam}"] = w.render(cam)
         return obs
+
+    def pad_forces(self) -> list[float]:
+        """Per arm the total normal force on its finger pads (N), summed over contacts in the same order as
+        `world.pad_contacts(arm)[1]`; only the contacts that touch a pad are visited."""
+        d = self.world.data
+        out = [0.0] * len(ARMS)
+        if d.ncon == 0:
+            return out
+        c = d.contact
+        pads = self._pads
+        g1, g2 = c.geom1.tolist(), c.geom2.tolist()
+        buf = np.empty(6)
+        m = self.world.model
+        for i, (a, b) in enumerate(zip(g1, g2)):
+            k = pads.get(a, pads.get(b))
+            if k is None:
+                continue
+            mujoco.mj_contactForce(m, d, i, buf)
+            out[k] += abs(buf[0])
+            if a in pads and b in pads and pads[a] != pads[b]:  # the two arms' pads touching each other
+                out[pads[b]] += abs(buf[0])
+        return out
 
     def render(self) -> np.ndarray:
         return np.hstack([self.world.render(c) for c in CAMERAS])
