@@ -92,6 +92,10 @@ class ObjectState(StrictModel):
     pos_m: Vec3
     yaw_deg: float
     upright_deg: float = Field(description="angle between the object's z axis and the world's up")
+    shape: str = Field(default="", max_length=40, description="what shape its known model is: box, cylinder, "
+                                                             "sphere, capsule, ... ('' = not told; a box)")
+    colour: str = Field(default="", max_length=40, description="its colour as the camera sees it ('' = not told)")
+    material: str = Field(default="", max_length=40, description="what it looks made of ('' = not told)")
 
 
 class FixtureView(StrictModel):
@@ -100,6 +104,7 @@ class FixtureView(StrictModel):
     name: str
     lo_m: Vec3
     hi_m: Vec3
+    label: str = Field(default="", max_length=80, description="what it is, e.g. 'wooden curb' ('' = its name)")
 
 
 class MarkerView(StrictModel):
@@ -109,6 +114,7 @@ class MarkerView(StrictModel):
     x_m: float
     y_m: float
     radius_m: float
+    label: str = Field(default="", max_length=80, description="what it looks like, e.g. 'green disc' ('' = its name)")
 
 
 class RobotView(StrictModel):

@@ -25,54 +25,85 @@ from kintsugi.methods.coral.costlib.templates import DEFAULT_KNOBS, HELPERS, Pla
 from kintsugi.methods.coral.costlib.edge import pick_past_edge, push_over_edge
 from kintsugi.methods.coral.costlib.grasp import pick, place
 from kintsugi.methods.coral.costlib.push import press, push
-from kintsugi.methods.coral.costlib.scene import NotUnderstood, duration_s, force_n, tall, target_object, toward, words
+from kintsugi.methods.coral.costlib.slide import slide
 from kintsugi.methods.coral.costlib.turn import pivot, tip
+from kintsugi.methods.coral.nouns import NotUnderstood
+from kintsugi.methods.coral.plan import plan_instruction
 from kintsugi.methods.coral.types import FormulationReply, FormulationRequest
 
 __all__ = ["DEFAULT_KNOBS", "NotUnderstood", "compose"]
 
 
 def compose(req: FormulationRequest, knobs: dict[str, float] | None = None) -> FormulationReply:
-    """Instruction + scene -> staged cost code, stages, contact regions. Raises NotUnderstood."""
+    """Instruction + scene -> staged cost code, stages, contact regions. Raises NotUnderstood.
+
+    The instruction is read in the controlled language and planned into primitives
+    (`kintsugi.methods.coral.plan`); each segment of primitives is written by its builder below."""
     k = {**DEFAULT_KNOBS, **(knobs or {})}
-    text = " ".join(words(req.task))
-    o = target_object(req)
+    cost_plan = plan_instruction(req)
     plan = Plan(code=[HELPERS])
     contact = req.contact_strategy
-    others = [x for x in req.objects if x.name != o.name]
-    if ("push" in text or "slide" in text) and "edge" in text and ("pick" in text or "lift" in text):
-        push_over_edge(plan, o, k, contact)
-        pick_past_edge(plan, o, k)
-    elif "flip" in text or "tip" in text.split():
-        fixture, axis, sign = toward(o, req)
-        if not tall(o) and fixture is not None and any(w in text for w in ("curb", "wall", "fixture", "against")):
-            pivot(plan, o, fixture, axis, sign, k, contact)
-        else:
-            tip(plan, o, axis, sign, k, contact)
-    elif "push" in text or "press" in text:
-        fixture, axis, sign = toward(o, req)
-        if fixture is None:
-            raise NotUnderstood("a push 'against' something needs a fixture in the scene; there is none")
-        push(plan, o, fixture, axis, sign, k, contact)
-        f = force_n(req.task)
-        if duration_s(req.task) is not None:  # the instruction's duration, else the library's default
-            k["hold_press_s"] = duration_s(req.task)
-        if f is not None:
-            press(plan, o, fixture, axis, sign, f, k, contact)
-    elif "pick" in text or "lift" in text:
-        pick(plan, o, others, k)
-        marker = next((m for m in req.markers if any(w in text for w in ("disc", "goal", "marker", "put", "place"))),
-                      None)
-        if marker is not None and any(w in text for w in (" put ", " place", " on ", "down")):
-            place(plan, o, others, marker.name, k)
-        else:
-            settle(plan, "hold", 0.5, "closed", k)
-    else:
-        raise NotUnderstood("no skill for this instruction: the library knows pick, put down on, push against, "
-                            "press with a force, flip over, pivot against a fixture, and push over the table edge "
-                            "then pick")
-    return FormulationReply(source=_dedup_params("\n\n\n".join(plan.code)), stages=plan.stages, regions=plan.regions,
-                            knobs=k, reasoning=" ".join(plan.why))
+    objects = {o.name: o for o in req.objects}
+    for seg in cost_plan.segments:
+        mark = (len(plan.code), len(plan.stages))
+        o = objects.get(seg.obj) if seg.obj else None
+        others = [x for x in req.objects if o is None or x.name != o.name]
+        a = seg.args
+        if seg.builder == "push_to_fixture":
+            push(plan, o, a["fixture"], a["axis"], a["sign"], k, contact)
+        elif seg.builder == "press":
+            k["hold_press_s"] = a["duration"]
+            press(plan, o, a["fixture"], a["axis"], a["sign"], a["force"], k, contact)
+        elif seg.builder == "pick":
+            pick(plan, o, others, k, contact)
+        elif seg.builder == "place":
+            place(plan, o, others, a["marker"], k)
+        elif seg.builder == "hold":
+            settle(plan, "hold", a["seconds"], "closed", k)
+        elif seg.builder == "push_over_edge":
+            push_over_edge(plan, o, k, contact)
+        elif seg.builder == "pick_overhang":
+            pick_past_edge(plan, o, k)
+        elif seg.builder == "tip":
+            tip(plan, o, a["axis"], a["sign"], k, contact)
+        elif seg.builder == "pivot":
+            pivot(plan, o, a["fixture"], a["axis"], a["sign"], k, contact)
+        elif seg.builder == "slide":
+            slide(plan, o, req, k, contact, marker=a.get("marker"), axis=a.get("axis", 0), sign=a.get("sign", 1.0),
+                  distance=a.get("distance"))
+        else:  # pragma: no cover - plan and builders are written together
+            raise NotUnderstood(f"no builder for {seg.builder}")
+        _rename_clashes(plan, *mark)
+    why = [f"Plan: {'; '.join(cost_plan.primitives)}."] + plan.why + [f"Note: {n}." for n in cost_plan.notes]
+    names = _unique_stage_names(plan.stages)
+    return FormulationReply(source=_dedup_params("\n\n\n".join(plan.code)), stages=names, regions=plan.regions,
+                            knobs=k, reasoning=" ".join(why)[:4000])
+
+
+def _unique_stage_names(stages: list) -> list:
+    seen: dict[str, int] = {}
+    out = []
+    for st in stages:
+        seen[st.name] = seen.get(st.name, 0) + 1
+        out.append(st if seen[st.name] == 1 else st.model_copy(update={"name": f"{st.name}-{seen[st.name]}"}))
+    return out
+
+
+def _rename_clashes(plan: Plan, code_from: int, stages_from: int) -> None:
+    """A segment that defines a function an earlier one defined (two slides, a withdraw after a withdraw) gets
+    its own names: `name_2`, in its code and its stages."""
+    defined = lambda chunks: set(re.findall(r"^def (\w+)\(", "\n".join(chunks), re.M))  # noqa: E731
+    clash = {c for c in defined(plan.code[:code_from]) & defined(plan.code[code_from:]) if "_seed_" not in c}
+    if not clash:
+        return
+    suffix = f"_{code_from}"
+    pattern = re.compile(r"\b(" + "|".join(sorted(clash, key=len, reverse=True)) + r")(?=(_seed_\w+)?\()")
+    plan.code[code_from:] = [pattern.sub(lambda m: m.group(1) + suffix, c) for c in plan.code[code_from:]]
+    fields = ("cost", "done", "grip", "keep")
+    for i in range(stages_from, len(plan.stages)):
+        st = plan.stages[i]
+        upd = {f: getattr(st, f) + suffix for f in fields if isinstance(getattr(st, f), str) and getattr(st, f) in clash}
+        plan.stages[i] = st.model_copy(update=upd)
 
 
 def _dedup_params(source: str) -> str:

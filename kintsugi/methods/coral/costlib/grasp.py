@@ -7,7 +7,10 @@ from kintsugi.methods.coral.costlib.templates import Plan, hold_code, timeout, w
 from kintsugi.methods.coral.types import ObjectState, StageSpec
 
 
-def pick(plan: Plan, o: ObjectState, others: list[ObjectState], k: dict[str, float]) -> None:
+def pick(plan: Plan, o: ObjectState, others: list[ObjectState], k: dict[str, float], contact: bool = True) -> None:
+    """Grasp across the side that fits, clear of the neighbours, at a pinch height from the finger length; lift.
+    Without a contact strategy the grasp is the planner's to find: the hand keeps its yaw and closes around the
+    object's centre."""
     n = o.name
     d_params = (f", start_{n}_pos" if others else "") + "".join(f", start_{x.name}_pos" for x in others)
     lets, clear_a, clear_b = [], [], []
@@ -49,17 +52,23 @@ def pick(plan: Plan, o: ObjectState, others: list[ObjectState], k: dict[str, flo
     # gripper; with other objects around, the side whose open fingers come down farthest from them wins, else
     # the least turn. (Inlined: calls take at most 4 arguments in the cost language.)
     params = f"start_{n}_yaw, start_yaw, {n}_half, max_opening{d_params}"
+    grasp_z = "maximum(0.006, {n}_half[2] - finger_length / 3.0)" if contact else "{n}_half[2] + 0.0 * finger_length"
     plan.code.append(f'''def {n}_open({n}_half, max_opening):
     """Open just wider than the object's wider horizontal side (either side may be the one pinched)."""
     return minimum(max_opening, 2.0 * maximum({n}_half[0], {n}_half[1]) + 0.035)
 
 
 def {n}_grasp_z({n}_half, finger_length):
-    return maximum(0.006, {n}_half[2] - finger_length / 3.0)''')
-    plan.code.append(f'''def {n}_aim({params}):
+    return {grasp_z.format(n=n)}''')
+    if contact:
+        plan.code.append(f'''def {n}_aim({params}):
     """The hand yaw to pinch with, chosen once when the stage begins (the variable `kept`)."""
 {side}
     return aim''')
+    else:
+        plan.code.append(f'''def {n}_aim(start_yaw):
+    """No grasp strategy: the hand keeps the yaw it has."""
+    return start_yaw''')
     plan.code.append(with_weights(f'''def reach_cost(tcp, yaw, step_change, {n}_pos, start_{n}_hi, kept):
     """Above the object with the hand turned across a side that fits."""
     ex = tcp[..., 0] - {n}_pos[..., 0]
