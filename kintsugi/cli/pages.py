@@ -2,8 +2,9 @@
 
 `trials/<key>.html` per trial: the outcome, the video (and, for System C, the planner plot beside it),
 the explain timeline with sim and wall time, every reasoning call (role, latency, the reply's gist,
-the request and reply behind a fold), and for System B the task graph the composer built (an
-interactive view, `trials/<key>.graph.html`). Every link is relative, so a campaign directory can be
+the request and reply behind a fold), and for System B the task graph the trial ran on: the composer's
+graph with the arranger's recovery branches, and each re-plan's (an interactive view,
+`trials/<key>.graph.html`). Every link is relative, so a campaign directory can be
 moved, zipped or served as it is.
 """
 
@@ -64,24 +65,52 @@ def _calls(rec: TrialRecord) -> str:
             + "".join(rows) + "</table>")
 
 
-def _graph(rec: TrialRecord, trials_dir: Path) -> str:
-    """The composer's task graph of a System B trial as an interactive page; '' when the record has none."""
+def compiled_graphs(rec: TrialRecord) -> list[tuple[str, object]]:
+    """The task graphs a System B trial ran on, from its transcript: for each composer reply, the graph with the
+    arranger's recovery branches inserted and filtered (Eq. 8) as the method ran it, else the composer's alone.
+    Returns [(caption, TaskGraph)], first the initial plan, then every re-plan; a graph that does not validate
+    is a caption with None."""
+    from kintsugi.taskgraph.augment import augment, parse_proposals
+    from kintsugi.taskgraph.forward import forward_filter
     from kintsugi.taskgraph.model import TaskGraph
+
+    calls = [c for c in rec.transcript if isinstance(c.get("reply"), dict)]
+    out: list[tuple[str, object]] = []
+    for i, call in enumerate(calls):
+        if call.get("role") != "composer" or not isinstance(call["reply"].get("graph"), dict):
+            continue
+        nxt = next((c for c in calls[i + 1:] if c.get("role") in ("composer", "arranger")), None)
+        proposals = nxt["reply"].get("proposals") if nxt is not None and nxt.get("role") == "arranger" else None
+        which = "the plan" if not out else f"re-plan {len(out)}"
+        try:
+            nominal = TaskGraph.from_data(call["reply"]["graph"])
+            if proposals is None:
+                out.append((f"{which}: the composer's graph (no arranger call: no recovery branches)", nominal))
+                continue
+            res = forward_filter(augment(nominal, parse_proposals(proposals)))
+            out.append((f"{which}: the composer's graph with the arranger's recovery branches "
+                        f"({len(res.kept)} kept by the forward filter, {len(res.rejected)} rejected)", res.graph))
+        except (KintsugiError, ValueError):
+            out.append((f"{which}: the graph in this record does not validate", None))
+    return out
+
+
+def _graph(rec: TrialRecord, trials_dir: Path) -> str:
+    """A System B trial's task graphs (recovery-augmented) as interactive pages; '' when the record has none."""
     from kintsugi.taskgraph.render import graph_html
 
-    reply = next((c.get("reply") for c in rec.transcript if c.get("role") == "composer"
-                  and isinstance(c.get("reply"), dict) and isinstance(c["reply"].get("graph"), dict)), None)
-    if reply is None:
-        return ""
-    try:
-        graph = TaskGraph.from_data(reply["graph"])
-    except (KintsugiError, ValueError):
-        return "<p>The composer's graph in this record does not validate.</p>"
-    name = rec.key.replace("/", "__") + ".graph.html"
-    (trials_dir / name).write_text(graph_html(graph))
-    return (f'<h2>Task graph</h2><p>The composer\'s graph ({len(graph.nodes)} nodes, {len(graph.edges)} edges); '
-            f'the arranger\'s monitors and recovery branches are in the timeline and the calls. '
-            f'<a href="{html.escape(name)}">open it alone</a></p><iframe src="{html.escape(name)}"></iframe>')
+    parts = []
+    for i, (caption, graph) in enumerate(compiled_graphs(rec)):
+        if graph is None:
+            parts.append(f"<p>{html.escape(caption)}.</p>")
+            continue
+        name = rec.key.replace("/", "__") + (".graph.html" if i == 0 else f".graph{i}.html")
+        (trials_dir / name).write_text(graph_html(graph))
+        n_nodes = len(graph.nodes)
+        link = f'<a href="{html.escape(name)}">open it alone</a>'
+        text = f"<p>{html.escape(caption)}; {n_nodes} nodes, {len(graph.edges)} edges. {link}</p>"
+        parts.append(text + (f'<iframe src="{html.escape(name)}"></iframe>' if i == 0 else ""))
+    return "<h2>Task graph</h2>" + "".join(parts) if parts else ""
 
 
 def write_trial_page(rec: TrialRecord, trials_dir: Path, report: str = "../report.html") -> Path:

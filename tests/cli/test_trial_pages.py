@@ -76,3 +76,21 @@ def test_a_trial_page_shows_the_planner_plot_and_the_composer_graph(tmp_path: Pa
     assert 'src="../videos/t.mp4"' in text and 'src="../videos/t.plan.png"' in text
     assert "<h2>Task graph</h2>" in text and (tmp_path / "trials" / (page.stem + ".graph.html")).exists()
     assert "<script>" not in text and "refused &lt;script&gt;" in text  # record text is escaped
+
+
+def test_a_system_b_trial_page_shows_the_graph_it_ran_on_with_its_recovery_branches(tmp_path: Path) -> None:
+    import json
+
+    golden = Path(__file__).resolve().parents[1] / "data" / "golden" / "records.jsonl"
+    data = next(d["record"] for d in map(json.loads, golden.read_text().splitlines())
+                if d["record"]["key"] == "pour-single/agentchord/default/drop/0")
+    rec = TrialRecord.model_validate(data)
+    (tmp_path / "report.html").write_text("<html></html>")
+    page = write_trial_page(rec, tmp_path / "trials")
+    assert_links_resolve(page)
+    text = page.read_text()
+    assert "the arranger&#x27;s recovery branches (24 kept by the forward filter, 0 rejected); 52 nodes" in text
+    view = (tmp_path / "trials" / (page.stem + ".graph.html")).read_text()
+    composed = data["transcript"][0]["reply"]["graph"]
+    assert view.count('<g class="box">') > len(composed["nodes"]) + len(composed["edges"])  # recovery boxes too
+    assert 'stroke-dasharray="4,2"' in view  # recovery boxes are drawn dashed
