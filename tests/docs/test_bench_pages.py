@@ -70,3 +70,43 @@ def test_the_agentchord_and_coral_table_scripts_write_their_pages(tmp_path: Path
         assert res.returncode == 0, res.stderr[-2000:]
         text = page.read_text()
         assert f"<!-- begin: {block} -->" in text and "| " in text and f"bench/{script}" in text
+
+
+def _campaign(out: Path, base_seed: int, wins: dict[str, int], trials: int = 10) -> Path:
+    """A campaign directory holding `wins[method]` successes of `trials` per method (records written directly)."""
+    from kintsugi.campaign.plan import build_config, expand
+    from kintsugi.campaign.store import ResultStore
+    from kintsugi.core.record import TrialRecord
+
+    cfg = build_config(task="pour-single", methods=list(wins), variants=["default"], conditions=["drop"],
+                       trials=trials, base_seed=base_seed)
+    store = ResultStore(out)
+    store.ensure_manifest(cfg)
+    with store.appender() as app:
+        for s in expand(cfg):
+            app.append(TrialRecord(**s.identity(), success=s.seed - base_seed < wins[s.method],
+                                   method_figures={"episode_steps": 1000 + s.seed - base_seed}))
+    return out
+
+
+def test_fresh_seeds_say_what_moved_against_campaigns_and_against_a_page_table(tmp_path: Path) -> None:
+    from bench.fresh import main as fresh_main
+
+    dev = _campaign(tmp_path / "dev", 0, {"agentchord": 10, "rekep": 9})
+    fresh = _campaign(tmp_path / "fresh", 10000, {"agentchord": 10, "rekep": 5})
+    page = tmp_path / "p.md"
+    assert fresh_main([str(fresh), "--dev", str(dev), "--figure", "steps", "--page", str(page), "--name", "f"]) == 0
+    text = page.read_text()
+    assert "| agentchord | 100 [72–100] (10/10) | 100 [72–100] (10/10) | 0 | 1004 → 1004 |" in text
+    assert "- rekep: 90 % → 50 % (-40 points; fresh 50 [24–76] (5/10)), outside the development interval" in text
+    assert "- 1 cells unchanged; 1 outside the development interval (rekep)." in text
+    assert "20 fresh trials, 15 successes overall" in text and "Written by `" in text
+
+    table = tmp_path / "dev.md"
+    table.write_text("## Table I\n\n| task | method | success % [95 % CI] | steps |\n|---|---|---|---|\n"
+                     "| pour-single | agentchord | **100 [72–100]** | 1004 |\n| pour-single | rekep | 50 [24–76] | 990 |\n")
+    assert fresh_main([str(fresh), "--dev-table", str(table), "Table I", "--page", str(page), "--name", "f"]) == 0
+    text = page.read_text()
+    assert "No success rate moved." in text and "0 outside" in text and text.count("<!-- begin: f -->") == 1
+    with pytest.raises(SystemExit):
+        fresh_main([str(fresh)])  # the development figures are required
