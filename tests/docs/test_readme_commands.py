@@ -1,5 +1,6 @@
-"""The README's commands run as written: every `kintsugi` command line parses against the real command
-(names and options exist), the quick ones run, and the Python API block runs."""
+"""The README's and the guides' commands run as written: every `kintsugi` command line in a README or docs
+shell block parses against the real command (names and options exist), the quick ones run, and the Python API
+block runs."""
 
 from __future__ import annotations
 
@@ -16,11 +17,12 @@ from kintsugi.cli import app
 
 ROOT = Path(__file__).resolve().parents[2]
 README = (ROOT / "README.md").read_text()
+DOCS = sorted((ROOT / "docs").glob("*.md"))
 
 
-def readme_commands() -> list[list[str]]:
+def readme_commands(text: str = README) -> list[list[str]]:
     out = []
-    for block in re.findall(r"```bash\n(.*?)```", README, flags=re.S):
+    for block in re.findall(r"```bash\n(.*?)```", text, flags=re.S):
         for line in block.replace("\\\n", " ").splitlines():
             argv = shlex.split(line.replace("<record>", "record"), comments=True)
             if argv[:1] == [".venv/bin/kintsugi"]:
@@ -28,9 +30,14 @@ def readme_commands() -> list[list[str]]:
     return out
 
 
-def test_every_readme_command_parses() -> None:
+def docs_commands() -> list[list[str]]:
+    return [argv for page in DOCS for argv in readme_commands(page.read_text())]
+
+
+def test_every_readme_and_docs_command_parses() -> None:
     commands = readme_commands()
-    assert len(commands) >= 12
+    assert len(commands) >= 12 and len(docs_commands()) >= 20
+    commands += docs_commands()
     group = typer.main.get_command(app)
     for argv in commands:
         sub = group.get_command(click.Context(group), argv[0])
@@ -42,7 +49,7 @@ def test_every_readme_command_parses() -> None:
 def test_the_quick_readme_commands_run(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
     monkeypatch.chdir(tmp_path)
     runner = CliRunner()
-    for argv in readme_commands():
+    for argv in readme_commands() + docs_commands():
         if argv[0] in ("tasks", "methods") or (argv[0] == "config" and ">" not in argv):
             res = runner.invoke(app, argv)
             assert res.exit_code == 0, (argv, res.output)
