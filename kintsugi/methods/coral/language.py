@@ -37,7 +37,7 @@ PARTICLES = {"pick": {"up"}, "place": {"down"}, "flip": {"over", "up"}, "push": 
              "touch": set()}
 NEGATIONS = (("do", "not"), ("never",), ("dont",))
 FILLERS = frozenset({"please", "now", "first", "next", "finally", "also", "afterwards", "then"})
-SPLIT_WORDS = (("and", "then"), ("after", "that"), ("then",))
+SPLIT_WORDS = (("and", "then"), ("after", "that"), ("but", "then"), ("then",), ("but",))
 CONTINUE_WORDS = frozenset({"using", "with", "against", "for", "until", "so", "by", "toward", "towards", "to",
                             "away", "onto", "on", "without", "left", "right", "forward", "forwards", "back",
                             "backward", "backwards", "over", "past"})
@@ -202,9 +202,12 @@ class Reader:
         # object phrase (the step's object), if none yet
         if s.obj is None:
             e, j = self._np(c, i)
-            if e is not None and e.kind == "object":
+            if e is not None and (e.kind == "object" or (e.kind == "group" and s.negated)):
                 s.obj = e.name
                 return j
+            if e is not None and e.kind == "group":
+                raise NotUnderstood(f"not understood: {' '.join(c[i:j])!r} names {e.name.replace(',', ', ')}: "
+                                    "one object per step")
         for a in ("a", "an", "the"):
             if at("with", a, "force", "of") or at("with", a, "constant", "force", "of") or \
                     at("with", a, "steady", "force", "of") or at("at", a, "force", "of"):

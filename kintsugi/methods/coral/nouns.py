@@ -53,6 +53,11 @@ def _split(text: str) -> set[str]:
     return {SYNONYMS.get(w, w) for w in re.findall(r"[a-z]+", re.sub(r"\d+", " ", text.lower()))}
 
 
+def _unknown(words: set[str]) -> frozenset[str]:
+    """The attribute words not told for a thing: every colour when its words hold none, every material likewise."""
+    return frozenset((COLOURS if not words & COLOURS else set()) | (MATERIALS if not words & MATERIALS else set()))
+
+
 class Lexicon:
     def __init__(self, entities: list[Entity], unlabelled: frozenset[str] = frozenset()) -> None:
         self.entities = entities
@@ -66,20 +71,18 @@ class Lexicon:
     def of(req: FormulationRequest) -> "Lexicon":
         out = []
         for o in req.objects:
-            w = _split(o.name) | _split(o.label) | _split(getattr(o, "shape", "") or "")
-            colour, material = getattr(o, "colour", ""), getattr(o, "material", "")
-            w |= _split(colour) | _split(material)
+            w = _split(o.name) | _split(o.label) | _split(o.shape)
+            w |= _split(o.colour) | _split(o.material)
             tall = o.size_m[2] > max(o.size_m[0], o.size_m[1]) and o.upright_deg < 30
             w |= STATE_TALL if tall else STATE_FLAT
             w |= {"object", "thing", "item"}
-            unknown = (COLOURS if not colour else frozenset()) | (MATERIALS if not material else frozenset())
-            out.append(Entity("object", o.name, frozenset(w), frozenset(unknown)))
+            out.append(Entity("object", o.name, frozenset(w), _unknown(w)))
         for f in req.fixtures:
-            out.append(Entity("fixture", f.name, frozenset(_split(f.name) | _split(getattr(f, "label", "") or "")
-                                                           | FIXTURE_NOUNS), COLOURS | MATERIALS))
+            w = _split(f.name) | _split(f.label) | FIXTURE_NOUNS
+            out.append(Entity("fixture", f.name, frozenset(w), _unknown(w)))
         for m in req.markers:
-            out.append(Entity("marker", m.name, frozenset(_split(m.name) | _split(getattr(m, "label", "") or "")
-                                                          | MARKER_NOUNS), COLOURS))
+            w = _split(m.name) | _split(m.label) | MARKER_NOUNS
+            out.append(Entity("marker", m.name, frozenset(w), _unknown(w) - MATERIALS))
         out += [Entity("table", "table", frozenset({"table"})),
                 Entity("edge", "edge", frozenset({"edge", "table", "front"})),
                 Entity("robot", "robot", ROBOT_NOUNS)]
@@ -147,6 +150,10 @@ class Lexicon:
         if len(found) > 1:
             raise NotUnderstood(f"not understood: {phrase!r} could be any of {', '.join(e.name for e in found)}: "
                                 "say which (by its name, colour or material)")
+        told = [x for x in want if x in found[0].unknown and x not in found[0].words]
+        if told:
+            self.notes.append(f"{' and '.join(told)} is not perceived for {found[0].name}: {phrase!r} is read as "
+                              f"{found[0].name}, the only match of the rest of it")
         if guessed:
             if found[0].kind != "object" or found[0].name not in self.unlabelled:
                 raise NotUnderstood(f"not understood: {' '.join(guessed)!r} in {phrase!r} is neither a word of the "

@@ -23,6 +23,9 @@ DEFAULT_PUSH_M = 0.10
 DEFAULT_PRESS_S = 2.0
 DEFAULT_HOLD_S = 1.0
 MAX_PUSH_M = 0.40
+MIN_OVERHANG_LENGTH_M = 0.15
+"""An object pushed out over the table edge must be at least this long: it sticks out far enough to be pinched
+from below (beyond the fingers' width) and still rests mostly on the table."""
 AXES = {"forward": (0, 1.0), "back": (0, -1.0), "left": (1, 1.0), "right": (1, -1.0)}
 """Robot-frame directions as (world axis, sign): the robot faces +x, its left is +y."""
 FINGER_MARGIN_M = 0.015
@@ -158,6 +161,12 @@ class Planner:
                 raise NotUnderstood(f"not understood: {s.words!r}: over the edge goes forward until it overhangs; "
                                     "give no other direction or distance")
             axis, sign = 0, 1.0
+            yaw = math.radians(o.yaw_deg)
+            length = abs(o.size_m[0] * math.cos(yaw)) + abs(o.size_m[1] * math.sin(yaw))
+            if length < MIN_OVERHANG_LENGTH_M:
+                raise NotUnderstood(f"not understood: {s.words!r}: {o.label} is {length * 100:.0f} cm long: it would "
+                                    f"fall off before it sticks out far enough to be pinched (it takes "
+                                    f"{MIN_OVERHANG_LENGTH_M * 100:g} cm)")
             self.add("push_over_edge", o, [Primitive("approach", o.name, {"face": _dirname(axis, -sign)}),
                                            Primitive("push", o.name, {"to": "edge"}),
                                            Primitive("withdraw", None, {"dz": "up"})])
@@ -293,6 +302,33 @@ class Planner:
         self.add("hold", None, [Primitive("hold", None, {"s": d})], seconds=d)
 
 
+ALLOWED = {
+    "pick": {"part", "relation", "target"}, "place": {"relation", "target"},
+    "push": {"relation", "target", "direction", "distance_m", "force_n", "duration_s", "part"},
+    "press": {"relation", "target", "force_n", "duration_s"},
+    "flip": {"orient", "using", "direction", "relation", "target"}, "hold": {"duration_s"}, "touch": set(),
+}
+"""What each verb may be told; anything else in its clause is refused, never dropped."""
+MODIFIER_WORDS = {"part": "part", "relation": "target", "target": "target", "direction": "direction",
+                  "distance_m": "distance", "force_n": "force", "duration_s": "duration",
+                  "orient": "orientation", "using": "fixture to use"}
+
+
+def check_modifiers(s: Step) -> None:
+    if s.negated:
+        return
+    given = {k for k in MODIFIER_WORDS if getattr(s, k) is not None}
+    extra = given - ALLOWED[s.verb]
+    if s.verb == "push" and s.duration_s is not None and s.force_n is None:
+        extra.add("duration_s")
+    if s.verb == "push" and s.part is not None and s.relation != "over-edge":
+        extra.add("part")
+    if extra:
+        what = ", ".join(sorted({MODIFIER_WORDS[k] for k in extra}))
+        raise NotUnderstood(f"not understood: {s.words!r}: '{s.verb}' takes no {what} here "
+                            "(a duration goes with a press or a hold, a distance or direction with a push)")
+
+
 VERB_OF = {"grasp": "pick", "lift": "pick", "carry": "place", "place": "place", "release": "place", "push": "push",
            "press": "press", "rotate": "flip"}
 
@@ -311,8 +347,9 @@ def plan_instruction(req: FormulationRequest) -> CostPlan:
         if s.verb == "touch":
             raise NotUnderstood(f"not understood: {s.words!r}: 'touch' is only understood forbidden "
                                 "('don't touch the cubes')")
-        if s.relation == "onto" and s.target is not None and s.target.kind == "marker" and s.verb == "push":
-            pass
+        check_modifiers(s)
+        if p.held is not None and s.obj == p.held and s.verb in ("push", "press", "flip", "pick"):
+            raise NotUnderstood(f"not understood: {s.words!r}: {s.obj} is in the hand then; put it on a marker first")
         getattr(p, s.verb)(s)
     if not any(g.builder != "hold" for g in p.segments):
         raise NotUnderstood("not understood: nothing to do: the instruction moves no object")

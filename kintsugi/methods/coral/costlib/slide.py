@@ -69,48 +69,56 @@ def slide(plan: Plan, o: ObjectState, req: FormulationRequest, k: dict[str, floa
         region = len(plan.regions) - 1
     tol = f"0.5 * {marker}_radius" if marker is not None else "0.012"
     tol_params = f", {marker}_radius" if marker is not None else ""
-    lets = f'''    gx = {gx}
-    gy = {gy}
-    dx = gx - first_{n}_pos[0]
-    dy = gy - first_{n}_pos[1]
+    if marker is not None:
+        lets = f"""    dx = ({gx}) - first_{n}_pos[0]
+    dy = ({gy}) - first_{n}_pos[1]
     length = sqrt(dx ** 2 + dy ** 2) + 1e-9
     ux = dx / length
-    uy = dy / length'''
-    behind = f'''    back = {_support(o)} + {k["paddle_m"] + 0.03}
-    px = first_{n}_pos[0] - ux * back
-    py = first_{n}_pos[1] - uy * back'''
+    uy = dy / length"""
+    else:
+        u = [0.0, 0.0]
+        u[axis] = sign
+        lets = f"""    ux = {u[0]!r}
+    uy = {u[1]!r}
+    length = {float(distance or 0.0)!r}"""
     gparams = "" if gp == f"first_{n}_pos" else f", {gp}"
     touch = "W_CONTACT * contact" if contact else f"W_CONTACT * norm(tcp - {n}_pos)"
     touch_p = "contact" if contact else f"{n}_pos"
-    code = f'''def over_cost(tcp, yaw, step_change, first_{n}_pos, start_{n}_yaw, {n}_half, start_{n}_hi{gparams}):
-    """Above the point behind the object's face turned away from the goal, clear of its top."""
+    behind = "\n\n\n".join(f'''def slide_p{a}(first_{n}_pos, start_{n}_yaw, {n}_half{gparams}):
+    """{a} of the point behind the object's face turned away from the goal."""
 {lets}
-{behind}
+    back = {_support(o)} + {k["paddle_m"] + 0.03}
+    return first_{n}_pos[{i}] - u{a} * back''' for i, a in enumerate("xy"))
+    args = f"first_{n}_pos, start_{n}_yaw, {n}_half{gparams}"
+    code = f'''{behind}
+
+
+def over_cost(tcp, yaw, step_change, {args}, start_{n}_hi):
+    """Above the point behind the object, clear of its top."""
+    ex = tcp[..., 0] - slide_px({args})
+    ey = tcp[..., 1] - slide_py({args})
     ez = tcp[..., 2] - start_{n}_hi[2] - {k["clear_m"]}
-    return W_REACH * sqrt((tcp[..., 0] - px) ** 2 + (tcp[..., 1] - py) ** 2 + ez ** 2) + W_YAW * 0.5 * wrap_pi(yaw) ** 2 + W_SMOOTH * step_change
+    return W_REACH * sqrt(ex ** 2 + ey ** 2 + ez ** 2) + W_YAW * 0.5 * wrap_pi(yaw) ** 2 + W_SMOOTH * step_change
 
 
-def over_done(tcp, first_{n}_pos, start_{n}_yaw, {n}_half, start_{n}_hi{gparams}):
-{lets}
-{behind}
+def over_done(tcp, {args}, start_{n}_hi):
+    ex = tcp[..., 0] - slide_px({args})
+    ey = tcp[..., 1] - slide_py({args})
     ez = tcp[..., 2] - start_{n}_hi[2] - {k["clear_m"]}
-    return sqrt((tcp[..., 0] - px) ** 2 + (tcp[..., 1] - py) ** 2 + ez ** 2) < {k["reach_tol_m"] * 1.5}
+    return sqrt(ex ** 2 + ey ** 2 + ez ** 2) < {k["reach_tol_m"] * 1.5}
 
 
-def down_cost(tcp, yaw, step_change, first_{n}_pos, start_{n}_yaw, {n}_half, start_{n}_lo{gparams}):
+def down_cost(tcp, yaw, step_change, {args}, start_{n}_lo):
     """Straight down behind the face to the pushing height."""
-{lets}
-{behind}
+    exy = sqrt((tcp[..., 0] - slide_px({args})) ** 2 + (tcp[..., 1] - slide_py({args})) ** 2)
     ez = tcp[..., 2] - start_{n}_lo[2] - {k["push_z_m"]}
-    exy = sqrt((tcp[..., 0] - px) ** 2 + (tcp[..., 1] - py) ** 2)
     return W_REACH * sqrt(exy ** 2 + ez ** 2) + 2.0 * W_REACH * exy + W_YAW * 0.5 * wrap_pi(yaw) ** 2 + W_SMOOTH * step_change
 
 
-def down_done(tcp, first_{n}_pos, start_{n}_yaw, {n}_half, start_{n}_lo{gparams}):
-{lets}
-{behind}
+def down_done(tcp, {args}, start_{n}_lo):
+    exy = sqrt((tcp[..., 0] - slide_px({args})) ** 2 + (tcp[..., 1] - slide_py({args})) ** 2)
     ez = tcp[..., 2] - start_{n}_lo[2] - {k["push_z_m"]}
-    return sqrt((tcp[..., 0] - px) ** 2 + (tcp[..., 1] - py) ** 2 + ez ** 2) < {k["reach_tol_m"]}
+    return sqrt(exy ** 2 + ez ** 2) < {k["reach_tol_m"]}
 
 
 def slide_cost(tcp, yaw, step_change, {touch_p}, {n}_pos, {n}_vel, first_{n}_pos{gparams}):
@@ -119,30 +127,29 @@ def slide_cost(tcp, yaw, step_change, {touch_p}, {n}_pos, {n}_vel, first_{n}_pos
     ox = {n}_pos[..., 0] - first_{n}_pos[0]
     oy = {n}_pos[..., 1] - first_{n}_pos[1]
     along = ox * ux + oy * uy
-    across = abs(oy * ux - ox * uy)
     ahead = (tcp[..., 0] - {n}_pos[..., 0]) * ux + (tcp[..., 1] - {n}_pos[..., 1]) * uy
     speed = {n}_vel[..., 0] * ux + {n}_vel[..., 1] * uy
-    return (W_GAP * relu(length - along) + 100.0 * relu(along - length - 0.005) + 5.0 * across + {touch}
-            + 20.0 * relu(abs(speed) - {k["push_speed_m_s"]}) + 20.0 * relu(ahead) + W_YAW * 0.5 * wrap_pi(yaw) ** 2
-            + W_SMOOTH * step_change)
+    return (W_GAP * relu(length - along) + 100.0 * relu(along - length - 0.005) + 5.0 * abs(oy * ux - ox * uy)
+            + {touch} + 20.0 * relu(abs(speed) - {k["push_speed_m_s"]}) + 20.0 * relu(ahead)
+            + W_YAW * 0.5 * wrap_pi(yaw) ** 2 + W_SMOOTH * step_change)
+
+
+def slide_there({n}_pos, first_{n}_pos{gparams}{tol_params}):
+    """On the goal (within the tolerance)."""
+    return sqrt(({n}_pos[0] - ({gx})) ** 2 + ({n}_pos[1] - ({gy})) ** 2) < {tol}
 
 
 def slide_done({n}_pos, {n}_vel, first_{n}_pos{gparams}{tol_params}):
-    """There (within the tolerance) and at rest."""
-    gx = {gx}
-    gy = {gy}
-    there = sqrt(({n}_pos[0] - gx) ** 2 + ({n}_pos[1] - gy) ** 2) < {tol}
-    return logical_and(there, norm({n}_vel) < 0.01)'''
+    """There and at rest."""
+    return logical_and(slide_there({n}_pos, first_{n}_pos{gparams}{tol_params}), norm({n}_vel) < 0.01)'''
     plan.code.append(with_weights(code, k))
     plan.code.append(with_weights(hold_code("leave_cost", dz="0.06", seed=True), k))
     plan.code.append(f'''def leave_done(tcp, start_tcp, {n}_pos, {n}_vel, first_{n}_pos{gparams}{tol_params}):
     """Up off the object, which is still on the goal and at rest."""
     ez = tcp[..., 2] - start_tcp[2] - 0.06
     exy = sqrt((tcp[..., 0] - start_tcp[0]) ** 2 + (tcp[..., 1] - start_tcp[1]) ** 2)
-    gx = {gx}
-    gy = {gy}
-    there = sqrt(({n}_pos[0] - gx) ** 2 + ({n}_pos[1] - gy) ** 2) < {tol}
-    return logical_and(logical_and(sqrt(exy ** 2 + ez ** 2) < 0.015, there), norm({n}_vel) < 0.01)''')
+    there = logical_and(slide_there({n}_pos, first_{n}_pos{gparams}{tol_params}), norm({n}_vel) < 0.01)
+    return logical_and(sqrt(exy ** 2 + ez ** 2) < 0.015, there)''')
     plan.stages += [
         StageSpec(name="over", cost="over_cost", done="over_done", grip="closed", timeout_s=timeout(k, 4.0)),
         StageSpec(name="down", cost="down_cost", done="down_done", grip="closed", noise_scale=0.5,
