@@ -109,7 +109,13 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
         ends the trial as a recorded failure with the reason, never a trial error."""
         try:
             while True:
-                outcome = self._traverse()
+                try:
+                    outcome = self._traverse()
+                except Unreachable as exc:  # re-planned from where things are now, the other arm may reach
+                    if self.replan is None or self.metrics.replans >= self.config.max_replans:
+                        raise
+                    self.log.event(self.robot.sim_time, "unreachable", str(exc))
+                    outcome = self._replan(f"{exc.args[0].split(':')[0]} is out of reach")
                 if outcome is not REPLANNED:
                     return bool(outcome)
         except (KeyframeError, ConductorError) as exc:
@@ -164,7 +170,9 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
     def fall_back(self, edge: Edge, reason: str = f"its merge check failed {MERGE_FAILS} times") -> Any:
         """Re-plan from the current observation (`replan`, at most `max_replans` times): REPLANNED with the new
         graph adopted, or False (recorded) when there is no re-planner or its budget is spent."""
-        why = f"the recovery of {edge.id} does not hold ({reason})"
+        return self._replan(f"the recovery of {edge.id} does not hold ({reason})")
+
+    def _replan(self, why: str) -> Any:
         if self.replan is None or self.metrics.replans >= self.config.max_replans:
             self.log.event(self.robot.sim_time, "gave up", f"{why}; no re-plan left")
             return False
@@ -293,6 +301,8 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
             self.metrics.recovery_latency_steps.append(self.robot_steps() - self.metrics.fired_at)
             self.metrics.fired_at = None
         result = self.robot.execute(call)
+        if getattr(result, "unseen", False) and not unplanned_ok:
+            result = self._look_again(call, result)
         if result.ik_failed and not unplanned_ok:
             result, call = self.reach_otherwise(edge, call, result)
         if name == "grasp" and isinstance(call.get("obj"), str):
@@ -321,6 +331,17 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
             # running it again in the same still scene would only refuse again
             raise ConductorError(f"{edge.id} {name} cannot be carried out: {result.message}")
         return True
+
+    def _look_again(self, call: dict, result: Any) -> Any:
+        """Its object is not seen (a hand between it and the cameras): every empty hand goes back out of the
+        view, and the action is planned once more from a fresh look. The result of that second try."""
+        self.log.event(self.robot.sim_time, "look again", f"{result.message}: the empty hands go back to clear "
+                       "the cameras' view")
+        for arm in ARMS:
+            if arm in self.arms and self._holds_nothing(arm):
+                back = self.robot.execute({"action": "back", "arm": arm})
+                self.metrics.episode_steps += back.steps // self.steps_per_tick
+        return self.robot.execute(call)
 
     def _keyframe_call(self, edge: Edge, call: dict) -> dict:
         arm = call["arm"]

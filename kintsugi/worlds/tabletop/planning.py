@@ -62,10 +62,11 @@ AXES = {"normal": 0, "closing": 1, "approach": 2}
 class PlanError(KintsugiError):
     """An action cannot be carried out (unreachable pose, object not visible); nothing moved."""
 
-    def __init__(self, message: str, ik_failed: bool = False, clipped: bool = False) -> None:
+    def __init__(self, message: str, ik_failed: bool = False, clipped: bool = False, unseen: bool = False) -> None:
         super().__init__(message)
         self.ik_failed = ik_failed
         self.clipped = clipped
+        self.unseen = unseen
 
 
 @dataclass
@@ -168,7 +169,7 @@ class Planner:
     def _visible(obj: str, f: ObjectFeatures | None) -> ObjectFeatures:
         if f is None or not f.visible or f.centroid is None:
             note = f" ({f.note})" if f is not None and f.note else ""
-            raise PlanError(f"{obj} is not visible to the cameras{note}")
+            raise PlanError(f"{obj} is not visible to the cameras{note}", unseen=True)
         return f
 
     @staticmethod

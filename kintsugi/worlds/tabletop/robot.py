@@ -68,6 +68,8 @@ class ActionResult(StrictModel):
     """False when the action could not be planned (unreachable, or its object not seen): nothing moved."""
     ik_failed: bool = False
     clipped: bool = False
+    unseen: bool = False
+    """Not planned because the object it acts on is not visible to the cameras (hidden, or out of view)."""
     interrupted: bool = False
     """A step observer stopped the action before it finished (the arms hold where they were commanded)."""
     steps: int = 0
@@ -214,7 +216,7 @@ class TabletopRobot:
             programs = {p.arm: self._planner.plan(p, self._arm_view(p.arm), feats) for p in parts}
         except PlanError as exc:
             return ActionResult(action=action.action, arms=arms, reached=False, planned=False, ik_failed=exc.ik_failed,
-                                clipped=exc.clipped, message=str(exc))
+                                clipped=exc.clipped, unseen=exc.unseen, message=str(exc))
         if plan_only:
             return ActionResult(action=action.action, arms=arms, reached=False, clipped=self._planner.clipped,
                                 message="planned" + (", target clipped to the workspace" if self._planner.clipped
