@@ -150,14 +150,15 @@ def compare(fresh: dict[tuple, Figure], dev: dict[tuple, Figure], steps: bool = 
         lines.append("| " + " | ".join(row) + " |")
     low, high = wilson_interval(k_total, n_total) if n_total else (0.0, 1.0)
     lines += ["", "**What moved on the fresh seeds:**",
-              f"- {len(fresh)} cells, {n_total} fresh trials, {k_total} successes overall "
+              f"- {len(fresh)} cell{'' if len(fresh) == 1 else 's'}, {n_total} fresh trials, {k_total} successes overall "
               f"({100 * k_total / max(n_total, 1):.0f} % [{100 * low:.0f}–{100 * high:.0f}])."]
     if not moved:
         lines.append("- No success rate moved.")
     for _, name, d, f, delta in sorted(moved, key=lambda m: (-m[0], m[1])):
         lines.append(f"- {name}: {d.rate:.0f} % → {f.rate:.0f} % ({delta:+.0f} points; fresh {f.text()})"
                      + ("" if d.low <= f.rate <= d.high else ", outside the development interval"))
-    lines.append(f"- {len(fresh) - len(moved) - len(unmatched)} cells unchanged; {len(outside)} outside the "
+    same = len(fresh) - len(moved) - len(unmatched)
+    lines.append(f"- {same} cell{'' if same == 1 else 's'} unchanged; {len(outside)} outside the "
                  f"development interval" + (f" ({', '.join(outside)})" if outside else "") + ".")
     if unmatched:
         lines.append(f"- No development figure for: {', '.join(unmatched)}.")
