@@ -164,6 +164,9 @@ def bench(
 @app.command()
 def report(out: Annotated[Path, typer.Argument(
         help="campaign directory, or a directory of campaign directories (then also an index.html over them)")],
+           index_only: Annotated[bool, typer.Option(
+               "--index-only", help="over a directory of campaigns: write only index.html, keeping the reports "
+                                    "their `kintsugi bench` wrote")] = False,
            plugin: PluginOpt = None) -> None:
     """Rebuild the tables, report and trial pages of a campaign directory from its results."""
     _plugins(plugin)
@@ -174,7 +177,12 @@ def report(out: Annotated[Path, typer.Argument(
         p for p in out.iterdir() if (p / MANIFEST).exists())
     if not campaigns:
         _fail(f"{out} holds no campaign ({MANIFEST}) and no campaign directories")
-    for campaign in campaigns:
+    if index_only and campaigns == [out]:
+        _fail(f"--index-only needs a directory of campaign directories; {out} is one campaign")
+    missing = [c for c in campaigns if index_only and not (c / "report.html").exists()]
+    if missing:
+        _fail(f"--index-only: {', '.join(str(c) for c in missing)} has no report.html yet; run `kintsugi report` on it")
+    for campaign in campaigns if not index_only else []:
         _report_one(campaign)
     if campaigns != [out]:
         console.print(escape(f"index: {write_index(out, campaigns, title=f'kintsugi: {out.name}')}"))

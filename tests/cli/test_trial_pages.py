@@ -94,3 +94,22 @@ def test_a_system_b_trial_page_shows_the_graph_it_ran_on_with_its_recovery_branc
     composed = data["transcript"][0]["reply"]["graph"]
     assert view.count('<g class="box">') > len(composed["nodes"]) + len(composed["edges"])  # recovery boxes too
     assert 'stroke-dasharray="4,2"' in view  # recovery boxes are drawn dashed
+
+
+def test_report_index_only_links_the_reports_bench_wrote_and_rewrites_none(tmp_path: Path) -> None:
+    from kintsugi.campaign.plan import build_config
+    from kintsugi.campaign.store import ResultStore
+
+    root = tmp_path / "tour"
+    for name in ("a", "b"):
+        ResultStore(root / name).ensure_manifest(build_config(task="peg-insertion", methods=["baseline"],
+                                                              variants=["round"], conditions=["none"], trials=1))
+    (root / "a" / "report.html").write_text("<html><body><h3>Table II</h3><table></table></body></html>")
+    res = runner.invoke(app, ["report", str(root), "--index-only"])
+    assert res.exit_code == 2 and "b has no report.html" in res.output.replace("\n", "")
+    (root / "b" / "report.html").write_text("<html><body>kept</body></html>")
+    res = runner.invoke(app, ["report", str(root), "--index-only"])
+    assert res.exit_code == 0, res.output
+    assert (root / "b" / "report.html").read_text() == "<html><body>kept</body></html>"
+    assert 'href="a/report.html"' in (root / "index.html").read_text()
+    assert runner.invoke(app, ["report", str(root / "a"), "--index-only"]).exit_code == 2
