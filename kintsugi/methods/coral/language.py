@@ -25,7 +25,7 @@ VERBS: dict[tuple[str, ...], str] = {
     ("move",): "place", ("carry",): "place", ("bring",): "place", ("putting",): "place", ("placing",): "place",
     ("moving",): "place",
     ("push",): "push", ("shove",): "push", ("slide",): "push", ("nudge",): "push", ("pushing",): "push",
-    ("sliding",): "push", ("keep", "pushing"): "push",
+    ("sliding",): "push", ("keep", "pushing"): "push", ("roll",): "push", ("rolling",): "push",
     ("press",): "press", ("keep", "pressing"): "press", ("pressing",): "press", ("keep", "pushing", "on"): "press",
     ("flip",): "flip", ("tip",): "flip", ("topple",): "flip", ("knock",): "flip", ("turn", "over"): "flip",
     ("flipping",): "flip", ("tipping",): "flip", ("toppling",): "flip", ("knocking",): "flip",
@@ -79,6 +79,8 @@ class Step:
     orient: str | None = None
     using: str | None = None
     words: str = ""
+    said: str = ""
+    """The verb as said (`roll`, `slide`, ...)."""
     notes: list[str] = field(default_factory=list)
 
 
@@ -145,7 +147,7 @@ class Reader:
                 return None
             raise NotUnderstood(f"not understood: {words!r}: no verb the language knows "
                                 "(pick up, put, push, slide, press, flip, tip, hold still)")
-        step = Step(verb=verb, negated=negated, words=words)
+        step = Step(verb=verb, negated=negated, words=words, said=c[i])
         self._modifiers(c, i + n, step, words)
         if step.obj is None and verb != "hold":
             if self.last is None:
@@ -202,7 +204,7 @@ class Reader:
         # object phrase (the step's object), if none yet
         if s.obj is None:
             e, j = self._np(c, i)
-            if e is not None and (e.kind == "object" or (e.kind == "group" and s.negated)):
+            if e is not None and (e.kind == "object" or (e.kind in ("group", "fixture") and s.negated)):
                 s.obj = e.name
                 return j
             if e is not None and e.kind == "group":
@@ -325,7 +327,7 @@ class Reader:
             verb, n = self._verb(c, i + 1)
             if verb is not None:
                 e, j = self._np(c, i + 1 + n)
-                obj = e.name if e is not None and e.kind in ("object", "group") else s.obj
+                obj = e.name if e is not None and e.kind in ("object", "group", "fixture") else s.obj
                 self._pending.append(Step(verb=verb, obj=obj, negated=True, words=" ".join(c[i:j])))
                 return j
         return i

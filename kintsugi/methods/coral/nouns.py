@@ -47,10 +47,24 @@ class Entity:
     words: frozenset[str] = frozenset()
     unknown: frozenset[str] = frozenset()
     """Attribute words the robot was not told for it (its colour or material when unknown)."""
+    near: frozenset[str] = frozenset()
+    """Colour words next to its perceived colour (an orange-looking board may be called brown): they match only
+    when no thing in the scene matches exactly."""
 
 
 def _split(text: str) -> set[str]:
     return {SYNONYMS.get(w, w) for w in re.findall(r"[a-z]+", re.sub(r"\d+", " ", text.lower()))}
+
+
+NEAR_COLOURS = {"orange": {"brown", "red", "yellow"}, "brown": {"orange", "red"}, "red": {"orange", "pink"},
+                "yellow": {"orange"}, "pink": {"red", "purple"}, "purple": {"pink", "blue"}, "blue": {"cyan", "purple"},
+                "cyan": {"blue", "green"}, "green": {"cyan"}, "grey": {"white", "black"}, "white": {"grey"},
+                "black": {"grey"}}
+"""Colours a person may call a perceived colour (camera hue buckets are coarse)."""
+
+
+def _near(words: set[str]) -> frozenset[str]:
+    return frozenset(x for c in words & COLOURS for x in NEAR_COLOURS.get(c, ()))
 
 
 def _unknown(words: set[str]) -> frozenset[str]:
@@ -76,13 +90,17 @@ class Lexicon:
             tall = o.size_m[2] > max(o.size_m[0], o.size_m[1]) and o.upright_deg < 30
             w |= STATE_TALL if tall else STATE_FLAT
             w |= {"object", "thing", "item"}
-            out.append(Entity("object", o.name, frozenset(w), _unknown(w)))
+            if (o.shape or "box") == "box":
+                w.add("block")
+                if max(o.size_m) < 1.25 * min(o.size_m):
+                    w.add("cube")
+            out.append(Entity("object", o.name, frozenset(w), _unknown(w), _near(w)))
         for f in req.fixtures:
             w = _split(f.name) | _split(f.label) | FIXTURE_NOUNS
-            out.append(Entity("fixture", f.name, frozenset(w), _unknown(w)))
+            out.append(Entity("fixture", f.name, frozenset(w), _unknown(w), _near(w)))
         for m in req.markers:
             w = _split(m.name) | _split(m.label) | MARKER_NOUNS
-            out.append(Entity("marker", m.name, frozenset(w), _unknown(w) - MATERIALS))
+            out.append(Entity("marker", m.name, frozenset(w), _unknown(w) - MATERIALS, _near(w)))
         out += [Entity("table", "table", frozenset({"table"})),
                 Entity("edge", "edge", frozenset({"edge", "table", "front"})),
                 Entity("robot", "robot", ROBOT_NOUNS)]
@@ -134,6 +152,9 @@ class Lexicon:
             want.append(base)
         noun = want[-1]
         found = [e for e in self.entities if noun in e.words and all(x in e.words or x in e.unknown for x in want)]
+        if not found:
+            found = [e for e in self.entities if noun in e.words
+                     and all(x in e.words or x in e.unknown or x in e.near for x in want)]
         if "edge" in want:
             found = [e for e in found if e.kind == "edge"]
         elif any(e.kind == "table" for e in found):

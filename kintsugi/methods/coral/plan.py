@@ -28,6 +28,7 @@ MIN_OVERHANG_LENGTH_M = 0.15
 from below (beyond the fingers' width) and still rests mostly on the table."""
 AXES = {"forward": (0, 1.0), "back": (0, -1.0), "left": (1, 1.0), "right": (1, -1.0)}
 """Robot-frame directions as (world axis, sign): the robot faces +x, its left is +y."""
+ROUND_SHAPES = ("cylinder", "sphere", "ball", "puck", "can", "capsule")
 FINGER_MARGIN_M = 0.015
 """How much narrower than the open gripper a side must be to be pinched across."""
 
@@ -99,6 +100,10 @@ class Planner:
         self.held: str | None = None
         self.over_edge: set[str] = set()
         self.pushed_to: dict[str, str] = {}
+        self.where: dict[str, tuple] = {}
+        """Where a slide left an object (the next leg starts there)."""
+        self.avoid: set[str] = set()
+        """Fixtures the instruction forbids touching: pushes go round them."""
 
     def obj(self, s: Step) -> ObjectState:
         if s.obj is None or s.obj not in self.objects:
@@ -151,6 +156,9 @@ class Planner:
 
     def push(self, s: Step) -> None:
         o = self.obj(s)
+        if s.said.startswith("roll") and (o.shape or "box") not in ROUND_SHAPES:
+            raise NotUnderstood(f"not understood: {s.words!r}: {o.label} is a {o.shape or 'box'}; only a round "
+                                "object rolls (push or slide it)")
         t = s.target
         if s.relation in ("against", "toward") and t is not None and t.kind == "fixture":
             self._push_to(o, t.name)
@@ -203,24 +211,72 @@ class Planner:
         self.pushed_to[o.name] = fixture
 
     def _slide(self, o: ObjectState, s: Step, marker: str | None = None, axis: int = 0, sign: float = 1.0) -> None:
+        origin = self.where.get(o.name, ("first", 0.0, 0.0))
         if marker is not None:
             if s.distance_m is not None or s.direction is not None:
                 raise NotUnderstood(f"not understood: {s.words!r}: onto the marker says where it stops; give no "
                                     "other direction or distance")
-            self.add("slide", o, [Primitive("approach", o.name, {"face": "behind"}),
-                                  Primitive("push", o.name, {"to": marker}), Primitive("withdraw", None)],
-                     marker=marker)
-            return
-        d = s.distance_m
-        if d is None:
-            d = DEFAULT_PUSH_M
-            self.notes.append(f"{s.words!r} names no distance: {DEFAULT_PUSH_M * 100:g} cm")
-        if not 0.005 <= d <= MAX_PUSH_M:
-            raise NotUnderstood(f"not understood: {s.words!r}: a push of {d * 100:g} cm (the language pushes "
-                                f"0.5 to {MAX_PUSH_M * 100:g} cm)")
-        self.add("slide", o, [Primitive("approach", o.name, {"face": _dirname(axis, -sign)}),
-                              Primitive("push", o.name, {"dir": _dirname(axis, sign), "m": round(d, 4)}),
-                              Primitive("withdraw", None)], axis=axis, sign=sign, distance=d)
+            goal: tuple = ("marker", marker)
+            face = "behind"
+        else:
+            d = s.distance_m
+            if d is None:
+                d = DEFAULT_PUSH_M
+                self.notes.append(f"{s.words!r} names no distance: {DEFAULT_PUSH_M * 100:g} cm")
+            if not 0.005 <= d <= MAX_PUSH_M:
+                raise NotUnderstood(f"not understood: {s.words!r}: a push of {d * 100:g} cm (the language pushes "
+                                    f"0.5 to {MAX_PUSH_M * 100:g} cm)")
+            if origin[0] != "first":
+                raise NotUnderstood(f"not understood: {s.words!r}: a push by a distance after one onto a marker")
+            step = [0.0, 0.0]
+            step[axis] = sign * d
+            goal = ("first", round(origin[1] + step[0], 4), round(origin[2] + step[1], 4))
+            face = _dirname(axis, -sign)
+        legs = self._around(o, origin, goal)
+        for i, (a, b) in enumerate(legs):
+            to = {"marker": lambda: {"to": b[1]}, "first": lambda: {"dir": _dirname(axis, sign), "m": round(d, 4)},
+                  "point": lambda: {"via": f"{b[1]:.3f},{b[2]:.3f}"}}[b[0]]()
+            self.add("slide", o, [Primitive("approach", o.name, {"face": face if i == 0 else "behind"}),
+                                  Primitive("push", o.name, {**to, **({"avoid": ",".join(sorted(self.avoid))}
+                                                                      if self.avoid else {})}),
+                                  *([Primitive("withdraw", None)] if b[0] != "point" else [])],
+                     origin=a, goal=b, avoid=sorted(self.avoid), tol=0.02 if b[0] == "point" else None)
+        self.where[o.name] = goal
+
+    def _point(self, o: ObjectState, p: tuple) -> tuple[float, float]:
+        if p[0] == "first":
+            return o.pos_m[0] + p[1], o.pos_m[1] + p[2]
+        if p[0] == "marker":
+            m = next(x for x in self.req.markers if x.name == p[1])
+            return m.x_m, m.y_m
+        return p[1], p[2]
+
+    def _around(self, o: ObjectState, origin: tuple, goal: tuple) -> list[tuple[tuple, tuple]]:
+        """The legs of a push from origin to goal: one, or two by a way point beside a fixture to avoid that
+        stands in the way (on the side away from the line's offset, far enough for the object and the fingers)."""
+        (ax, ay), (gx, gy) = self._point(o, origin), self._point(o, goal)
+        length = math.hypot(gx - ax, gy - ay)
+        if length < 1e-6 or not self.avoid:
+            return [(origin, goal)]
+        ux, uy = (gx - ax) / length, (gy - ay) / length
+        nx, ny = -uy, ux
+        radius = math.hypot(o.size_m[0], o.size_m[1]) / 2
+        for name in sorted(self.avoid):
+            f = self.fixtures[name]
+            (cx, cy), hx, hy = _centre(f), (f.hi_m[0] - f.lo_m[0]) / 2, (f.hi_m[1] - f.lo_m[1]) / 2
+            along = (cx - ax) * ux + (cy - ay) * uy
+            side = (cx - ax) * nx + (cy - ay) * ny
+            reach = abs(nx) * hx + abs(ny) * hy + radius + 0.01
+            if not 0.0 < along < length or abs(side) > reach:
+                continue
+            off = reach + 0.03
+            sgn = -1.0 if side > 0 else 1.0
+            if abs(side) < 1e-3:  # straight ahead: the side nearer the middle of the table
+                sgn = 1.0 if (cy + ny * off) ** 2 <= (cy - ny * off) ** 2 else -1.0
+            wp = ("point", round(cx + sgn * nx * off, 4), round(cy + sgn * ny * off, 4))
+            self.notes.append(f"{name} stands in the way: the push goes by {wp[1]:.3f}, {wp[2]:.3f}")
+            return [(origin, wp), (wp, goal)]
+        return [(origin, goal)]
 
     def press(self, s: Step) -> None:
         o = self.obj(s)
@@ -343,6 +399,7 @@ def plan_instruction(req: FormulationRequest) -> CostPlan:
         raise NotUnderstood("not understood: nothing to do: the instruction only says what not to do ("
                             + "; ".join(s.words for s in negated) + "); say what to do")
     p = Planner(req)
+    p.avoid = {s.obj for s in negated if s.obj in p.fixtures}
     for s in positive:
         if s.verb == "touch":
             raise NotUnderstood(f"not understood: {s.words!r}: 'touch' is only understood forbidden "
@@ -356,6 +413,11 @@ def plan_instruction(req: FormulationRequest) -> CostPlan:
     if p.segments[-1].builder == "pick":
         p.add("hold", None, [Primitive("hold", None, {"s": 0.5})], seconds=0.5)
     for s in negated:
+        if s.obj in p.fixtures:
+            if s.verb != "touch":
+                raise NotUnderstood(f"not understood: {s.words!r}: a fixture does not move; say 'without touching'")
+            p.notes.append(f"forbidden: {s.words}; the hand and the object keep clear of {s.obj}")
+            continue
         banned = set((s.obj or "").split(","))
         for g in p.segments:
             for prim in g.prims:

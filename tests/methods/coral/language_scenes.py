@@ -22,7 +22,17 @@ SPHERE = ObjectState(name="sphere", label="steel sphere", size_m=(0.05, 0.05, 0.
 YELLOW = [c.model_copy(update={"colour": "yellow"}) for c in CUBES]
 GREEN_DISC = DISC.model_copy(update={"label": "green disc"})
 
+AROUND_BOX = BOX.model_copy(update={"label": "red box", "colour": "red", "material": "cardboard",
+                                    "pos_m": (-0.02, 0.0, 0.025)})
+POST = FixtureView(name="post", lo_m=(0.08, -0.02, 0.0), hi_m=(0.12, 0.02, 0.1), label="grey post")
+AROUND_GOAL = MarkerView(name="goal", x_m=0.2, y_m=0.0, radius_m=0.035, label="green disc")
+LYING = ObjectState(name="cylinder", label="wooden cylinder", size_m=(0.055, 0.118, 0.055), pos_m=(-0.03, 0.0, 0.0275),
+                    yaw_deg=0.0, upright_deg=0.0, shape="cylinder", colour="orange", material="wood")
+BLUE_DISC = MarkerView(name="goal", x_m=0.17, y_m=0.0, radius_m=0.04, label="blue disc")
+
 SCENES = {
+    "around": ([AROUND_BOX], [POST], [AROUND_GOAL]),
+    "roll": ([LYING], [], [BLUE_DISC]),
     "clutter-colours": ([GREEN.model_copy(update={"colour": "green"}), *YELLOW], [], [GREEN_DISC]),
     "push": ([BOX], [WALL], []),
     "clutter": ([GREEN, *CUBES], [], [DISC]),

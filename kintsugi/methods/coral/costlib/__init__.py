@@ -25,7 +25,7 @@ from kintsugi.methods.coral.costlib.templates import DEFAULT_KNOBS, HELPERS, Pla
 from kintsugi.methods.coral.costlib.edge import pick_past_edge, push_over_edge
 from kintsugi.methods.coral.costlib.grasp import pick, place
 from kintsugi.methods.coral.costlib.push import press, push
-from kintsugi.methods.coral.costlib.slide import slide
+from kintsugi.methods.coral.costlib.slide import avoid_code, slide
 from kintsugi.methods.coral.costlib.turn import pivot, tip
 from kintsugi.methods.coral.nouns import NotUnderstood
 from kintsugi.methods.coral.plan import plan_instruction
@@ -43,6 +43,9 @@ def compose(req: FormulationRequest, knobs: dict[str, float] | None = None) -> F
     cost_plan = plan_instruction(req)
     plan = Plan(code=[HELPERS])
     contact = req.contact_strategy
+    avoid = {(seg.obj, f) for seg in cost_plan.segments if seg.builder == "slide" for f in seg.args["avoid"]}
+    for name, f in sorted(avoid):
+        plan.code.append(avoid_code(name, [f], next(x for x in req.objects if x.name == name)))
     objects = {o.name: o for o in req.objects}
     for seg in cost_plan.segments:
         mark = (len(plan.code), len(plan.stages))
@@ -69,8 +72,7 @@ def compose(req: FormulationRequest, knobs: dict[str, float] | None = None) -> F
         elif seg.builder == "pivot":
             pivot(plan, o, a["fixture"], a["axis"], a["sign"], k, contact)
         elif seg.builder == "slide":
-            slide(plan, o, req, k, contact, marker=a.get("marker"), axis=a.get("axis", 0), sign=a.get("sign", 1.0),
-                  distance=a.get("distance"))
+            slide(plan, o, req, k, contact, origin=a["origin"], goal=a["goal"], avoid=a["avoid"], tol_m=a["tol"])
         else:  # pragma: no cover - plan and builders are written together
             raise NotUnderstood(f"no builder for {seg.builder}")
         _rename_clashes(plan, *mark)
