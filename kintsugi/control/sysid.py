@@ -267,6 +267,16 @@ def fit(problem: SysIdProblem) -> SysIdResult:
         replay.engine.close()
 
 
+def replay_loss(problem: SysIdProblem) -> float:
+    """The loss of the model's own parameters on the logs: one batched replay, no search."""
+    replay = _Replay(problem)
+    try:
+        values = np.array([P.get_param(problem.model, s.kind, s.name) for s in problem.params])
+        return float(replay.losses([replay.variant(values)])[0])
+    finally:
+        replay.engine.close()
+
+
 def _search(problem: SysIdProblem, replay: _Replay) -> SysIdResult:
     cfg = problem.cfg
     specs = problem.params

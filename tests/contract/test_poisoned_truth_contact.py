@@ -103,8 +103,9 @@ def _robot_world() -> property:
 
 def _poisoned_context(real):  # noqa: ANN001, ANN202
     def context(self, tags, reasoner, seed):  # noqa: ANN001, ANN202
+        given = real(self, tags, reasoner, seed)  # the episode's own side runs as in a plain trial (the robot's camera)
         if ORACLE_TAG in tags:
-            return real(self, tags, reasoner, seed)
+            return given
         setup = dataclasses.replace(self.setup, truth=Poison("truth"), nominal=Poison("catalogue midpoints"),
                                     params=Poison("drawn parameters"))
         return self.task.context(self.cfg, setup, False, reasoner, Poison("seed"))

@@ -197,7 +197,10 @@ def check_adaptation(reply: AdaptReply, req: AdaptRequest, samples: int, steps: 
 
 
 ADAPT = ROLES.register(Role(name="adapt", request=AdaptRequest, reply=AdaptReply, package="kintsugi.methods.coral",
-                         embedded=embedded_adaptation, system="system_contact", sends_images=False))
+                         embedded=embedded_adaptation, system="system_contact",
+                         image_labels={"scene.image_png":
+                             "the scene camera at the start: the table, the objects, the fixtures "
+                             "and the robot's hand"}))
 
 
 def ask_adaptation(reasoner: Any, req: AdaptRequest, samples: int, steps: int, limits: ProbeLimits = ProbeLimits()

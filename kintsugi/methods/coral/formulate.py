@@ -289,7 +289,10 @@ def embedded_formulation(req: FormulationRequest) -> FormulationReply:
 
 FORMULATE = ROLES.register(Role(name="formulate", request=FormulationRequest, reply=FormulationReply,
                                 package="kintsugi.methods.coral", embedded=embedded_formulation,
-                                system="system_contact", sends_images=False))
+                                system="system_contact",
+                                image_labels={"image_png":
+                                    "the scene camera at the start: the table, the objects, the fixtures "
+                                    "and the robot's hand"}))
 
 
 def ask_formulation(reasoner: Any, req: FormulationRequest, samples: int, steps: int,

@@ -41,14 +41,34 @@ def probe_limits() -> Any:
     return ProbeLimits(wall_s=60.0)
 
 
+def object_label(known: Any, name: str) -> str:
+    """What a user or a camera calls an object: its known model's label, or its name when it has none or when
+    another object has the same label (every object must be told apart)."""
+    labels = [g.label or n for n, g in known.geometry.items()]
+    label = known.geometry[name].label or name
+    return label if labels.count(label) == 1 else name
+
+
 def object_views(known: Any) -> list[Any]:
     """What the priors role is told of each object: its label, the size of its known model's main part, and
     every part's size and place (a board's plate and handle)."""
     from kintsugi.methods.coral.types import ObjectView, PartView
 
-    return [ObjectView(label=n, size_m=tuple(2 * h for h in g.parts[0].half),
+    return [ObjectView(label=object_label(known, n), size_m=tuple(2 * h for h in g.parts[0].half),
                        parts=[PartView(size_m=tuple(2 * h for h in p.half), offset_m=p.pos) for p in g.parts])
             for n, g in known.geometry.items()]
+
+
+def scene_png(robot: Any, reasoner: Any) -> bytes | None:
+    """The scene camera's image for a request, when the backend looks at images (a model endpoint does; the
+    embedded rules read labels and sizes)."""
+    from kintsugi.reasoning.base import sees_images
+
+    if not sees_images(reasoner):
+        return None
+    from kintsugi.methods.recovery.method import to_png
+
+    return to_png(robot.camera_image())
 
 
 @dataclass(frozen=True)
@@ -77,6 +97,8 @@ class Coral:
         self.info: dict[str, Any] = {"variant": variant.name}
         self._now = 0.0
         self._seed = 0
+        self._png: bytes | None = None
+        """The scene camera's image at the start, sent with the priors and formulation requests."""
         self.clock = {"planning": 0.0, "physics": 0.0, "sysid": 0.0, "reasoning": 0.0}
         """Wall seconds by where they went: MPPI iterations, the robot acting (physics, sensors, inner-rate checks),
         system identification, the roles (priors, formulation, adaptation: reply, checks and probes)."""
@@ -89,23 +111,29 @@ class Coral:
         from kintsugi.worlds.contact.world import tilt_deg, yaw_of
 
         ctx, cfg, scene = self.ctx, self.ctx.cfg, self.ctx.known
+        from kintsugi.methods.coral.nouns import colour_name
+
         objects = []
         for name, geo in scene.geometry.items():
             o = obs.objects[name]
-            objects.append(ObjectState(name=name, label=name, size_m=tuple(2 * h for h in geo.parts[0].half),
+            objects.append(ObjectState(name=name, label=object_label(scene, name),
+                                       size_m=tuple(2 * h for h in geo.parts[0].half),
                                        pos_m=tuple(float(x) for x in o.pos),
                                        yaw_deg=math.degrees(float(yaw_of(o.quat))),
-                                       upright_deg=float(tilt_deg(o.quat))))
+                                       upright_deg=float(tilt_deg(o.quat)), shape=geo.parts[0].shape,
+                                       colour=colour_name(geo.rgba), material=geo.material))
         fixtures = [FixtureView(name=k, lo_m=tuple(p - h for p, h in zip(f.pos, f.half)),
-                                hi_m=tuple(p + h for p, h in zip(f.pos, f.half))) for k, f in scene.fixtures.items()]
-        markers = [MarkerView(name=k, x_m=m.x, y_m=m.y, radius_m=m.radius) for k, m in scene.markers.items()]
+                                hi_m=tuple(p + h for p, h in zip(f.pos, f.half)), label=f.label)
+                    for k, f in scene.fixtures.items()]
+        markers = [MarkerView(name=k, x_m=m.x, y_m=m.y, radius_m=m.radius, label=m.label or f"{colour_name(m.rgba)} disc")
+                   for k, m in scene.markers.items()]
         e = cfg.effector
         robot = RobotView(max_opening_m=e.max_opening_m, finger_length_m=e.finger_length_m, kp_n_per_m=e.kp_n_per_m,
                           force_limit_n=e.force_limit_n, table_edge_x_m=cfg.table.edge_x_m, home_m=e.home_m)
         docs = variable_docs(None, list(scene.geometry), list(scene.fixtures), list(scene.markers), self.variant.contact)
         return FormulationRequest(task=ctx.task_text, objects=objects, fixtures=fixtures, markers=markers, robot=robot,
                                   priors=priors, variables=docs, functions=dict(FUNCTIONS),
-                                  contact_strategy=self.variant.contact)
+                                  contact_strategy=self.variant.contact, image_png=self._png)
 
     # --- the trial ----------------------------------------------------------------------------------------------
     def run(self, robot: Any, log: TrialLog) -> bool:
@@ -147,10 +175,11 @@ class Coral:
         obs = robot.observe()
         self._seed = observation_seed(obs)
         views = object_views(ctx.known)
-        # No camera image: the contact robot has no image API yet, so the roles get labels, sizes and poses only.
         with self._timed("reasoning"):
-            priors, notes = ask_priors(reasoner, PriorsRequest(task=ctx.task_text, objects=views))
-        beliefs, stress = stressed(dict(priors.objects), cfg.coral)
+            self._png = scene_png(robot, reasoner)
+            priors, notes = ask_priors(reasoner, PriorsRequest(task=ctx.task_text, objects=views, image_png=self._png))
+        names = {object_label(ctx.known, n): n for n in ctx.known.geometry}
+        beliefs, stress = stressed({names[k]: v for k, v in priors.objects.items()}, cfg.coral)
         if stress:
             log.event(obs.t, "priors", stress)
         self.info["priors"] = {k: v.model_dump() for k, v in beliefs.items()}

@@ -117,7 +117,10 @@ def check_priors(reply: PriorsReply, request: PriorsRequest) -> tuple[PriorsRepl
 
 
 PRIORS = ROLES.register(Role(name="priors", request=PriorsRequest, reply=PriorsReply, package="kintsugi.methods.coral",
-                          embedded=embedded_priors, system="system_contact", sends_images=False))
+                          embedded=embedded_priors, system="system_contact",
+                          image_labels={"image_png":
+                              "the scene camera at the start: the table, the objects, the fixtures "
+                              "and the robot's hand"}))
 
 
 def ask_priors(reasoner: Any, request: PriorsRequest) -> tuple[PriorsReply, list[str]]:

@@ -14,7 +14,7 @@ import numpy as np
 
 from kintsugi.control.rollout import get_state
 from kintsugi.control.sysid import ExecutionLog as ReplayLog
-from kintsugi.control.sysid import ParamSpec, Signal, SysIdConfig, SysIdProblem, SysIdResult, fit
+from kintsugi.control.sysid import ParamSpec, Signal, SysIdConfig, SysIdProblem, SysIdResult, fit, replay_loss
 from kintsugi.core.errors import ConfigError
 from kintsugi.worlds.contact.objects import Physics
 from kintsugi.worlds.contact.robot import ExecutionLog, Observation
@@ -22,6 +22,10 @@ from kintsugi.worlds.contact.world import PlanningWorld
 
 WINDOW_TICKS = 30
 MAX_WINDOWS = 24
+"""Windows taken from one attempt."""
+FIT_WINDOWS = 16
+"""Windows one fit replays, over every attempt so far (sliding ones first, the rest evenly spread): a fit's
+cost is the windows times the grid, so it stays bounded however many attempts the trial has had."""
 MOVING_M_S = 0.01
 WINDOW_CAP = 1.0
 """A window's loss counts in full up to 1 (binned residuals of 5 mm / 1 N rms), then barely: a push where
@@ -144,10 +148,19 @@ class BeliefFitter:
         self.signals = [Signal(sensor=f"{obj}_pos", scale=0.005, bin=5), Signal(sensor="ft_force", scale=1.0, bin=5)]
         sim = planning.cfg.sim
         substeps = max(1, round(sim.planning_timestep_s / sim.timestep_s))
-        self.cfg = cfg or SysIdConfig(grid=9, zoom_rounds=2, max_evals=40, substeps=substeps, window_cap=WINDOW_CAP)
+        self.cfg = cfg or SysIdConfig(grid=7, zoom_rounds=2, max_evals=24, substeps=substeps, window_cap=WINDOW_CAP)
         self.logs: list[ReplayLog] = []
         self.kept: str | None = None
         """Why the last fit was not adopted (None: it was)."""
+
+    def chosen(self) -> list[ReplayLog]:
+        """The windows a fit replays: at most `FIT_WINDOWS` of all so far, every sliding one first (they alone
+        carry the friction), the others evenly spread over the attempts."""
+        slides = [i for i, w in enumerate(self.logs) if w.label == "slide"]
+        others = [i for i, w in enumerate(self.logs) if w.label != "slide"]
+        keep = _thinned(slides, FIT_WINDOWS - min(MIN_FELT // 2, len(others)))
+        keep += _thinned(others, FIT_WINDOWS - len(keep))
+        return [self.logs[i] for i in sorted(keep)]
 
     def add(self, log: ExecutionLog) -> int:
         new = windows(self.planning, log, self.obj)
@@ -185,12 +198,16 @@ class BeliefFitter:
             raise ConfigError(f"no informative window in the log: {self.obj!r} never moved and nothing was felt")
         belief = self.planning.physics_of(self.obj)
         params = self.params if self.slid else self.params[:1]
-        result = fit(SysIdProblem(self.planning.model, params, self.signals, self.logs, self.cfg))
+        problem = SysIdProblem(self.planning.model, params, self.signals, self.chosen(), self.cfg)
+        if not self.weighed:  # nothing to search: any mass replays the log alike
+            self.kept = "the object never slid or hung from the hand, so the log cannot tell its mass"
+            loss = replay_loss(problem)
+            values = {f"mass:{self.obj}": belief.mass_kg}
+            return belief, SysIdResult(params=values, prior=dict(values), loss=loss, prior_loss=loss)
+        result = fit(problem)
         gain = result.prior_loss - result.loss
         self.kept = None
-        if not self.weighed:
-            self.kept = "the object never slid or hung from the hand, so the log cannot tell its mass"
-        elif not gain > max(MIN_GAIN, MIN_GAIN_FRACTION * result.prior_loss):
+        if not gain > max(MIN_GAIN, MIN_GAIN_FRACTION * result.prior_loss):
             self.kept = (f"the fit lowers the replay loss by {gain:.3g} ({result.prior_loss:.3g} -> {result.loss:.3g}), "
                          "within the replay's noise")
         if self.kept:

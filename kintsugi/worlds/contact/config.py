@@ -137,6 +137,23 @@ class CameraSection(StrictModel):
     fovy_deg: float = Field(45.0, gt=5, lt=170)
 
 
+class PerceptionSection(StrictModel):
+    """Where a method's object poses come from (see `kintsugi.worlds.contact.perception`)."""
+
+    poses: Literal["perceived", "truth"] = "perceived"
+    """perceived: estimated from the scene camera's depth and segmentation renders (with noise and latency);
+    truth: the simulator's exact poses, an oracle. Methods with the true physics (the experts) always get truth."""
+    rate_hz: float = Field(10.0, gt=0, le=100)
+    latency_s: float = Field(0.05, ge=0, le=1)
+    depth_noise_m: float = Field(0.001, ge=0, le=0.05)
+    """Depth noise (standard deviation) at 1 m; it grows with the square of the distance."""
+    width: int = Field(240, ge=32, le=2048)
+    height: int = Field(180, ge=24, le=2048)
+    """Size of the depth and segmentation renders (at most the scene camera's `camera.width` x `camera.height`)."""
+    min_points: int = Field(30, ge=5)
+    """An object with fewer pixels in view keeps its last pose."""
+
+
 class BoxSection(StrictModel):
     """A box on the table: full size, mass, friction (against the table) and where it starts."""
 
@@ -307,6 +324,7 @@ class ContactConfig(StrictModel):
     sysid: SysIdSection = SysIdSection()
     coral: CoralSection = CoralSection()
     camera: CameraSection = CameraSection()
+    perception: PerceptionSection = PerceptionSection()
 
 
 class PushPickBoardConfig(ContactConfig):

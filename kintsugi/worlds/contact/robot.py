@@ -5,9 +5,10 @@ What a method can read:
 - proprioception: end-effector x, y, z, yaw, finger positions and their velocities;
 - the wrist F/T sensor, tared and in the world frame (`tared_force_world`), and the
   finger touch pads;
-- object poses and velocities from `pose_tracker`, the ONE place that reads object
-  state from the simulator: it stands for what a pose tracker gives (FoundationPose in
-  the paper's simulation, a motion-capture system on its real robot).
+- object poses and velocities from the robot's camera (`use_poses("perceived")`: depth and
+  segmentation renders fitted with the known models, `kintsugi.worlds.contact.perception`), or from
+  `pose_tracker`, the ONE place that reads object state from the simulator: an oracle standing for a
+  perfect tracker (a motion-capture system).
 """
 
 from __future__ import annotations
@@ -100,6 +101,29 @@ class ContactRobot:
         self._watchers = watchers if watchers is not None else []
         self.ctrlrange = world.ctrlrange
         self.log = ExecutionLog()
+        self._estimator = None
+        self.poses = "truth"
+        """Where `observe` takes object poses from: "truth" (`pose_tracker`) or "perceived" (the camera)."""
+
+    def use_poses(self, mode: str) -> None:
+        """Take object poses from the camera ("perceived": `kintsugi.worlds.contact.perception`) or from the exact
+        tracker ("truth", an oracle)."""
+        if mode == self.poses:
+            return
+        if self._estimator is not None:
+            self._estimator.close()
+            self._estimator = None
+        if mode == "perceived":
+            from kintsugi.worlds.contact.perception import PoseEstimator
+
+            w = self._world
+            self._estimator = PoseEstimator(w.model, w.scene.geometry, w.layout.obj_geoms, w.cfg.perception)
+        self.poses = mode
+
+    def _objects(self) -> dict[str, TrackedObject]:
+        if self._estimator is None:
+            return pose_tracker(self._world)
+        return {k: TrackedObject(*v) for k, v in self._estimator.poses(self._world.data).items()}
 
     @property
     def sim_time(self) -> float:
@@ -116,7 +140,7 @@ class ContactRobot:
             force=tared_force_world(raw_f, yaw, lay.hand_weight_n),
             torque=d.sensordata[lay.sensors["ft_torque"]].copy(),
             touch=np.array([d.sensordata[lay.sensors["touch_l"]][0], d.sensordata[lay.sensors["touch_r"]][0]]),
-            objects=pose_tracker(w), ctrl=d.ctrl.copy(),
+            objects=self._objects(), ctrl=d.ctrl.copy(),
         )
 
     def act(self, action: np.ndarray | Plan, duration_s: float, feedback: Feedback | None = None,
@@ -152,9 +176,18 @@ class ContactRobot:
         w.data.time = t
         mujoco.mj_forward(w.model, w.data)
         self.attempts += 1
+        if self._estimator is not None:
+            self._estimator.reset()
         for hook in self._on_restart:
             hook()
         return self.observe()
+
+    def camera_image(self) -> np.ndarray:
+        """(H, W, 3) uint8 RGB of the fixed scene camera (`camera.*`: pose, field of view, size), rendered
+        offscreen (MUJOCO_GL=egl): what a camera beside the table sees (no planner overlays)."""
+        r = self._world.renderer()
+        r.update_scene(self._world.data, camera="scene")
+        return r.render().copy()
 
     def new_log(self) -> ExecutionLog:
         """Start a fresh log (a new attempt); returns the finished one."""

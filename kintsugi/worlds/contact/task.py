@@ -38,7 +38,9 @@ class ContactEpisode(Episode):
         self.robot.plan_stats = self.video.plan_step if self.video else None
 
     def context(self, tags: frozenset[str], reasoner: ReasonerSettings, seed: int) -> ContactContext:
-        """Only `oracle-physics` methods (the expert baselines, by design) are given the true physics and the seed."""
+        """Only `oracle-physics` methods (the expert baselines, by design) are given the true physics and the seed;
+        the others see object poses through the robot's camera unless `perception.poses=truth`."""
+        self.robot.use_poses("truth" if ORACLE_TAG in tags else self.cfg.perception.poses)
         return self.task.context(self.cfg, self.setup, ORACLE_TAG in tags, reasoner, seed)
 
     def score(self) -> tuple[bool, TaskFigures]:
