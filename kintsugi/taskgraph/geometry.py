@@ -104,11 +104,14 @@ def tilt_deg(axis, gravity: Vec3) -> float:
 
 def top_tilt_deg(obj: object, gravity: Vec3) -> float:
     """The object's tilt from standing: sign-free (0-90 degrees), or from its top (0-180) when the top is known,
-    by a seen cap or the robot's tracked top; one whose top is below its centre reads 180 - the axis's tilt."""
+    by a seen cap, the robot's tracked top or a container's opening; one whose top is below its centre reads
+    180 - the axis's tilt."""
     tilt = tilt_deg(getattr(obj, "axis", None), gravity)
     top, centre = vector_feature(obj, "cap"), vector_feature(obj, "centroid")
     if top is None:
         top = vector_feature(obj, "tracked_top")
+    if top is None:  # a container's open end is its top
+        top = vector_feature(obj, "opening")
     if top is not None and centre is not None and dot(top, gravity) > dot(centre, gravity):
         tilt = 180.0 - tilt
     return tilt

@@ -61,7 +61,8 @@ class ObjectPerception:
                                | {f"{k}:cap": self._caps[k] for k in capped})
         caps = {k: clouds.pop(f"{k}:cap") for k in capped}
         clouds |= {k: np.concatenate([clouds[k], caps[k]]) for k in capped}
-        out = {k: features(k, clouds[k], self._shapes[k].primitive(), views=views) for k in wanted}
+        out = {k: closed_on_top(features(k, clouds[k], self._shapes[k].primitive(), views=views), clouds[k],
+                                self._shapes[k]) for k in wanted}
         out |= {k: with_cap(out[k], cap.mean(axis=0)) for k, cap in caps.items() if len(cap) >= MIN_CAP_POINTS}
         if cloths:  # a cloth: its flex pixels (objtype FLEX), corners from the cloud's footprint
             flex_clouds = object_clouds(views, {k: {i} for i, k in cloths.items()}, objtype=int(mujoco.mjtObj.mjOBJ_FLEX),
@@ -100,6 +101,34 @@ def truth_features(truth: GroundTruth, shapes: dict[str, Shape]) -> dict[str, Ob
         if s.cap:
             out[name] = with_cap(out[name], centre + (s.half_height - CAP_HALF_M) * frame[:, 2])
     return out
+
+
+def closed_on_top(f: ObjectFeatures, cloud: np.ndarray, shape: Shape) -> ObjectFeatures:
+    """A standing cup fitted with its opening up whose top is a closed disc of points (no cavity seen from above)
+    stands on its rim: its opening is the lower end, and it is not upright. The points alone fit an upturned
+    cup about as well either way up (the closed bottom is a few of them), so the fit's own choice is checked."""
+    ex = f.extremes or {}
+    if shape.kind != "cylinder" or shape.wall is None or not f.upright or f.centroid is None or "opening" not in ex:
+        return f
+    if ex["opening"][2] < f.centroid[2] - CAP_BELOW_M:  # fitted upturned: its opening faces down
+        return f.model_copy(update={"upright": False})
+    if ex["opening"][2] <= f.centroid[2] or len(cloud) == 0:
+        return f
+    p = np.asarray(cloud, float)
+    c = np.asarray(f.centroid, float)
+    top = p[p[:, 2] >= p[:, 2].max() - TOP_BAND_M]
+    inner = np.hypot(top[:, 0] - c[0], top[:, 1] - c[1]) <= CLOSED_INNER_SHARE * (shape.radius - shape.wall)
+    if int(inner.sum()) < MIN_CLOSED_POINTS:
+        return f
+    opening = 2 * c - np.asarray(ex["opening"], float)
+    return f.model_copy(update={"extremes": {**ex, "opening": _v(opening)}, "upright": False,
+                                "note": (f.note + "; " if f.note else "") + "closed on top: stands on its rim"})
+
+
+TOP_BAND_M = 0.006
+CLOSED_INNER_SHARE = 0.6
+"""Points this share of the inner radius from the axis, in the top band: a closed end facing up."""
+MIN_CLOSED_POINTS = 15
 
 
 def with_cap(f: ObjectFeatures, cap: np.ndarray) -> ObjectFeatures:
