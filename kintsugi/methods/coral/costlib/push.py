@@ -61,7 +61,7 @@ def press_done(force, {n}_lo, {n}_hi, {fixture}_lo, {fixture}_hi):
     ok = abs({sign} * force[..., {axis}] - {force}) < {k["force_tol_n"]}
     return logical_and(ok, push_gap({n}_lo, {n}_hi, {fixture}_lo, {fixture}_hi) < 0.002)''', k))
     plan.stages.append(StageSpec(name="press", cost="press_cost", done="press_done", grip="closed",
-                                 region=(len(plan.regions) - 1) if contact else None, hold_s=hold + 0.5,
+                                 region=(len(plan.regions) - 1) if contact else None, hold_s=hold + 0.2,
                                  timeout_s=hold + 4.0, press_n=sign * force, press_axis=axis, noise_scale=0.15))
     plan.why.append(f"Then press with {force:g} N for {hold:g} s (force feedback at the inner rate, a small "
                     "sampling noise for fine regulation).")

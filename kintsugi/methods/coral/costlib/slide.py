@@ -122,8 +122,13 @@ def slide(plan: Plan, o: ObjectState, req: FormulationRequest, k: dict[str, floa
     else:
         tol, tp = repr(tol_m or 0.012), []
     line = _plist(op, gp)
-    lets = f"""    ux = slide_ux({line})
-    uy = slide_uy({line})"""
+    fixed = "point" in (origin[0], goal[0])
+    """A leg to or from a way point (a constant of this scene) has a constant direction: written as numbers."""
+    u_of = {"x": f"slide_ux({line})", "y": f"slide_uy({line})"}
+    if fixed:
+        u_of = {"x": repr(round((c - a) / length0, 6)), "y": repr(round((d - b) / length0, 6))}
+    lets = f"""    ux = {u_of["x"]}
+    uy = {u_of["y"]}"""
     args = _plist(op, [f"start_{n}_yaw", f"{n}_half"], gp)
     if len(args.split(", ")) > 4:  # pragma: no cover - points take at most one variable each
         raise ValueError("a leg's points take too many variables")
@@ -135,11 +140,10 @@ def slide(plan: Plan, o: ObjectState, req: FormulationRequest, k: dict[str, floa
     dy = ({gy}) - ({oy})
     return d{a_} / (sqrt(dx ** 2 + dy ** 2) + 1e-9)''' for a_ in "xy")
     behind = "\n\n\n".join(f'''def slide_p{a_}({args}):
-    return ({(ox, oy)[i]}) - slide_u{a_}({line}) * slide_back({args})''' for i, a_ in enumerate("xy"))
-    behind = f'''{units}
-
-
-def slide_back({args}):
+    return ({(ox, oy)[i]}) - {u_of[a_]} * slide_back({args})''' for i, a_ in enumerate("xy"))
+    if fixed:
+        units = ""
+    behind = f'''{units}{"" if fixed else chr(10) * 3}def slide_back({args}):
     """How far behind the object's centre the fingers start: its support along the push, and a margin."""
 {lets}
     return {_support(o)} + {k["paddle_m"] + 0.03}
@@ -155,7 +159,7 @@ def over_cost(tcp, yaw, step_change, {_plist(args, f"start_{n}_hi", av_params)})
     ex = tcp[..., 0] - slide_px({args})
     ey = tcp[..., 1] - slide_py({args})
     ez = tcp[..., 2] - start_{n}_hi[2] - {k["clear_m"]}
-    return W_REACH * sqrt(ex ** 2 + ey ** 2 + ez ** 2) + W_YAW * 0.5 * wrap_pi(yaw) ** 2 + W_SMOOTH * step_change
+    return W_REACH * sqrt(ex ** 2 + ey ** 2 + ez ** 2) + W_HALF_YAW * wrap_pi(yaw) ** 2 + W_SMOOTH * step_change
 
 
 def over_done(tcp, {_plist(args, f"start_{n}_hi")}):
@@ -169,7 +173,7 @@ def down_cost(tcp, yaw, step_change, {_plist(args, f"start_{n}_lo")}):
     """Straight down behind the face to the pushing height."""
     exy = sqrt((tcp[..., 0] - slide_px({args})) ** 2 + (tcp[..., 1] - slide_py({args})) ** 2)
     ez = tcp[..., 2] - start_{n}_lo[2] - {z!r}
-    return W_REACH * sqrt(exy ** 2 + ez ** 2) + 2.0 * W_REACH * exy + W_YAW * 0.5 * wrap_pi(yaw) ** 2 + W_SMOOTH * step_change
+    return W_REACH * (sqrt(exy ** 2 + ez ** 2) + 2.0 * exy) + W_HALF_YAW * wrap_pi(yaw) ** 2 + W_SMOOTH * step_change
 
 
 def down_cost_seed_x({args}):
@@ -201,7 +205,7 @@ def slide_cost(tcp, yaw, step_change, {_plist(touch_p, f"{n}_pos", f"{n}_vel", o
     speed = {n}_vel[..., 0] * ux + {n}_vel[..., 1] * uy
     return (W_GAP * relu(length - along) + 100.0 * relu(along - length - 0.005) + 20.0 * abs(oy * ux - ox * uy)
             + {touch} + 20.0 * relu(abs(speed) - {k["push_speed_m_s"]}) + 20.0 * relu(ahead)
-            + W_YAW * 0.5 * wrap_pi(yaw) ** 2 + W_SMOOTH * step_change{av})
+            + W_HALF_YAW * wrap_pi(yaw) ** 2 + W_SMOOTH * step_change{av})
 
 
 def slide_there({_plist(f"{n}_pos", gp, tp)}):
@@ -210,7 +214,7 @@ def slide_there({_plist(f"{n}_pos", gp, tp)}):
 
 def slide_done({_plist(f"{n}_pos", f"{n}_vel", gp, tp)}):
     return logical_and(slide_there({_plist(f"{n}_pos", gp, tp)}), norm({n}_vel) < 0.01)'''
-    plan.code.append(with_weights(code, k))
+    plan.code.append(with_weights(code.replace("W_HALF_YAW", repr(round(k["w_yaw"] / 2, 6))), k))
     final = goal[0] != "point"
     if final:
         plan.code.append(with_weights(hold_code("leave_cost", dz="0.06", seed=True), k))
