@@ -168,3 +168,31 @@ def test_code_that_never_terminates_cannot_be_written() -> None:
             assert "refused" in str(exc) or "defines" in str(exc)
         else:
             raise AssertionError(f"accepted: {src[:40]!r}")
+
+
+# --- the instruction language: random word salads over the language's own words and the scene's names -------------
+
+LANGUAGE_SCENES = ("push", "clutter", "board", "tall", "curb", "puck", "two", "cyl", "around", "roll")
+
+
+@settings(max_examples=400, deadline=None, derandomize=True)
+@given(scene=st.sampled_from(LANGUAGE_SCENES), words=st.lists(st.sampled_from(
+    "push pick up put place press flip tip slide roll hold still the a box board puck cylinder wall curb disc goal "
+    "post red green blue wooden against onto on to away from left right forward back by 5 cm 10 n for 2 seconds "
+    "with force of don't not without lifting touching it then and over edge table using as fixture gently teapot "
+    ", . until sticks out handle its".split()), min_size=1, max_size=14))
+def test_any_word_salad_is_a_plan_or_one_line_refusal(scene: str, words: list[str]) -> None:
+    """Never a crash: each instruction is planned (and its code compiles) or refused with one line."""
+    from kintsugi.methods.coral.formulate import request_variables
+    from kintsugi.methods.coral.nouns import NotUnderstood
+    from kintsugi.sandbox import CostProgram
+    from tests.methods.coral.language_scenes import scene_request
+
+    req = scene_request(scene, " ".join(words))
+    try:
+        reply = compose(req)
+    except NotUnderstood as exc:
+        assert str(exc).startswith("not understood") and "\n" not in str(exc)
+        return
+    program = CostProgram.compile(reply.source, request_variables(req))
+    assert all(program.has(s.cost) and program.has(s.done) for s in reply.stages)
