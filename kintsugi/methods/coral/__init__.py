@@ -23,10 +23,11 @@ def _make(name: str) -> Any:
 for _name, _help in (
     ("coral", "system C: CoRAL - physics priors, retrieval memory (coral.memory_path), formulated staged cost code "
               "with contact regions, MPPI attempts with the adaptation outer loop (sysid + strategy refinement)"),
-    ("l2r", "system C: Language-to-Rewards - formulated cost code once, no contact regions, one attempt, "
-            "no adaptation, no memory"),
+    ("l2r", "system C: Language-to-Rewards - formulated cost code once, no contact strategy (no contact regions, "
+            "no grasp side or height: the planner finds where to touch), one attempt, no adaptation, no memory"),
     ("coral-no-memory", "system C: CoRAL without the retrieval memory"),
     ("coral-no-refinement", "system C: CoRAL without the outer loop (attempts repeat with the same beliefs and code)"),
-    ("coral-no-contact", "system C: CoRAL without contact regions (the planner finds where to touch)"),
+    ("coral-no-contact", "system C: CoRAL without a contact strategy (no contact regions, no grasp side or height: "
+                         "the planner finds where to touch)"),
 ):
     METHODS.register(_name, _help, tags=TAGS)(_make(_name))
