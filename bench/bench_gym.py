@@ -3,10 +3,10 @@
 scorer every `score_every` steps) vs the driver's `tick()` alone (the world's own control period: physics, health
 check and watchers, exactly what any method's control loop runs), measured in the same run.
 
-Like with like: both start from `reset(seed=0)` and run the same number of control periods under the same held
-command (so the physics is the same trajectory); each repeat runs the two in turn, the order alternating, and the
-ratio is taken per repeat (adjacent in time, so the machine's other load hits both alike); the median of the
-repeats is reported with their range. Times are the process's CPU time (`time.process_time`), so that the other
+Like with like: two copies of the same trial (`reset(seed=0)`) run the same number of control periods under the same
+held command (so the physics is the same trajectory), one by raw ticks and one by `env.step`, in alternating chunks
+(`--chunk` periods, the order within a pair alternating too), so that the machine's other load falls on both alike;
+the ratio is taken per repeat and the median of the repeats is reported with their range. Times are the process's CPU time (`time.process_time`), so that the other
 programs sharing the machine's cores do not count as either's cost. `--profile` adds the cProfile of `env.step` per family.
 
     .venv/bin/python bench/bench_gym.py [--steps 400] [--repeats 7] [--profile]
@@ -35,38 +35,46 @@ FAMILIES = {"peg": "kintsugi/PegInsertion-v0", "tabletop": "kintsugi/PourSingle-
             "contact": "kintsugi/PushForce-v0"}
 
 
-def _raw(env, steps: int) -> float:  # noqa: ANN001
-    env.reset(seed=0)
-    tick = env.driver.tick
-    start = time.process_time()
-    for _ in range(steps):
-        tick()
-    return time.process_time() - start
+def run_pair(raw_env, step_env, steps: int, chunk: int, flip: bool) -> tuple[float, float]:  # noqa: ANN001
+    """CPU seconds of `steps` raw ticks (on `raw_env`) and `steps` env steps (on `step_env`, the same trial), run
+    in alternating chunks of `chunk` control periods so that the machine's load falls on both alike."""
+    raw_env.reset(seed=0)
+    step_env.reset(seed=0)
+    tick, step, hold = raw_env.driver.tick, step_env.step, step_env.driver.command()
+    clock = time.process_time
+    raw = env = 0.0
+    for i in range(steps // chunk):
+        for part in ((0, 1) if (i % 2 == 0) != flip else (1, 0)):
+            start = clock()
+            if part == 0:
+                for _ in range(chunk):
+                    tick()
+                raw += clock() - start
+            else:
+                for _ in range(chunk):
+                    step(hold)
+                env += clock() - start
+    return raw, env
 
 
-def _env(env, steps: int) -> float:  # noqa: ANN001
-    env.reset(seed=0)
-    hold, step = env.driver.command(), env.step
-    start = time.process_time()
-    for _ in range(steps):
-        step(hold)
-    return time.process_time() - start
-
-
-def measure(env, steps: int, repeats: int) -> dict[str, float]:  # noqa: ANN001
-    """Per-repeat (raw s, env s, ratio), the order of the pair alternating between repeats."""
-    raws, envs, ratios = [], [], []
-    _env(env, min(steps, 50))  # warm caches (renderer-free paths, first scorer call)
-    for r in range(repeats):
-        if r % 2 == 0:
-            raw, stepped = _raw(env, steps), _env(env, steps)
-        else:
-            stepped, raw = _env(env, steps), _raw(env, steps)
-        raws.append(raw / steps)
-        envs.append(stepped / steps)
-        ratios.append(stepped / raw)
-    return {"raw_us": statistics.median(raws) * 1e6, "env_us": statistics.median(envs) * 1e6,
-            "ratio": statistics.median(ratios), "lo": min(ratios), "hi": max(ratios)}
+def measure(eid: str, steps: int, repeats: int, chunk: int) -> dict[str, float]:
+    """Per repeat (raw s, env s, ratio); the median over repeats and the ratios' range."""
+    raw_env = gym.make(eid, images=False, max_seconds=1e6).unwrapped
+    step_env = gym.make(eid, images=False, max_seconds=1e6).unwrapped
+    try:
+        run_pair(raw_env, step_env, min(steps, 2 * chunk), chunk, False)  # warm up (first scorer call, caches)
+        raws, envs, ratios = [], [], []
+        for r in range(repeats):
+            raw, env = run_pair(raw_env, step_env, steps, chunk, r % 2 == 1)
+            raws.append(raw / steps)
+            envs.append(env / steps)
+            ratios.append(env / raw)
+        return {"raw_us": statistics.median(raws) * 1e6, "env_us": statistics.median(envs) * 1e6,
+                "ratio": statistics.median(ratios), "lo": min(ratios), "hi": max(ratios),
+                "hz": step_env.driver.control_hz, "score_s": step_env.score_every_s}
+    finally:
+        raw_env.close()
+        step_env.close()
 
 
 def profile(env, steps: int) -> None:  # noqa: ANN001
@@ -84,20 +92,20 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--steps", type=int, default=400)
     ap.add_argument("--repeats", type=int, default=7)
+    ap.add_argument("--chunk", type=int, default=20, help="control periods per alternating chunk")
     ap.add_argument("--profile", action="store_true")
     args = ap.parse_args()
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"machine: {platform.machine()} {platform.processor() or ''} {os.cpu_count()} cores, load {load:.2f}; "
-          f"python {platform.python_version()}; {args.steps} control steps x {args.repeats} repeats, no rendering")
+          f"python {platform.python_version()}; {args.steps} control steps x {args.repeats} repeats in chunks of "
+          f"{args.chunk}, no rendering")
     for family, eid in FAMILIES.items():
-        env = gym.make(eid, images=False, max_seconds=1e6).unwrapped
-        try:
-            m = measure(env, args.steps, args.repeats)
-            print(f"{family:9s} {eid:26s} {env.driver.control_hz:5.0f} Hz  raw {m['raw_us']:7.1f} us/step  "
-                  f"env {m['env_us']:7.1f} us/step  ratio {m['ratio']:.2f} (repeats {m['lo']:.2f}-{m['hi']:.2f})")
-            if args.profile:
-                profile(env, args.steps)
-        finally:
+        m = measure(eid, args.steps, args.repeats, args.chunk)
+        print(f"{family:9s} {eid:26s} {m['hz']:4.0f} Hz, scored every {m['score_s']:g} s  raw {m['raw_us']:7.1f} us/step  "
+              f"env {m['env_us']:7.1f} us/step  ratio {m['ratio']:.2f} (repeats {m['lo']:.2f}-{m['hi']:.2f})")
+        if args.profile:
+            env = gym.make(eid, images=False, max_seconds=1e6).unwrapped
+            profile(env, args.steps)
             env.close()
 
 

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 import re
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -84,8 +85,13 @@ class HoleShape:
 
     def width(self, directions: np.ndarray) -> np.ndarray:
         """Extent of the opening along each unit direction (rows of (x, y))."""
-        along = directions @ np.array(self.vertices()).T
+        along = directions @ self._corners_t
         return along.max(axis=1) - along.min(axis=1)
+
+    @cached_property
+    def _corners_t(self) -> np.ndarray:
+        """`vertices()` as a (2, n) array, computed once (the scorer asks for widths while a trial runs)."""
+        return np.array(self.vertices()).T
 
 
 def gap_along(peg: PegShape, hole: HoleShape, direction: tuple[float, float]) -> float:

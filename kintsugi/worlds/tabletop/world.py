@@ -170,7 +170,7 @@ class TabletopWorld:
 
     def set_grip_travel(self, arm: str, travel_m: float) -> None:
         """Command a partial closing travel (0 = open, the max opening = closed): a gentle close steps it up."""
-        self._grip_ctrl[arm] = float(np.clip(travel_m, 0.0, self.cfg.robot.gripper_max_opening_m))
+        self._grip_ctrl[arm] = min(max(float(travel_m), 0.0), self.cfg.robot.gripper_max_opening_m)
         if arm not in self._forced_open:
             self.data.ctrl[self.arms[arm].grip_act] = self._grip_ctrl[arm]
 

@@ -67,26 +67,19 @@ class Driver(ABC):
         """The action clipped to the bounds, as floats (plain Python: this runs every control period, and numpy
         calls on a handful of values cost more than the physics of a light world)."""
         try:
-            if isinstance(action, np.ndarray):
-                if action.dtype.kind not in "fiub":
-                    raise TypeError(action.dtype)
-                vals = action.ravel().tolist()
-            else:
-                vals = [float(v) for v in action]
-        except (TypeError, ValueError):
+            vals = action.ravel().tolist() if isinstance(action, np.ndarray) else [float(v) for v in action]
+            bounds = self._bounds
+            if bounds is None:
+                bounds = self._bounds = (self.action_low.tolist(), self.action_high.tolist())
+            if len(vals) != len(bounds[0]):
+                raise DriverError(f"a {self.family} action has {len(self.action_names)} values "
+                                  f"({', '.join(self.action_names)}), not {len(vals)}")
+            out = [lo if v < lo else hi if v > hi else float(v) for v, lo, hi in zip(vals, *bounds)]
+        except (TypeError, ValueError):  # not numbers (strings, complex, objects)
             raise DriverError(f"a {self.family} action is a sequence of {len(self.action_names)} numbers "
                               f"({', '.join(self.action_names)}), not {action!r}") from None
-        bounds = self._bounds
-        if bounds is None:
-            bounds = self._bounds = (self.action_low.tolist(), self.action_high.tolist())
-        if len(vals) != len(bounds[0]):
-            raise DriverError(f"a {self.family} action has {len(self.action_names)} values "
-                              f"({', '.join(self.action_names)}), not {len(vals)}")
-        out = []
-        for v, lo, hi in zip(vals, *bounds):
-            if not -INF < v < INF:  # NaN or infinite
-                raise DriverError(f"a {self.family} action must be finite, got {vals}")
-            out.append(lo if v < lo else hi if v > hi else float(v))
+        if not -INF < sum(vals) < INF and not all(math.isfinite(v) for v in vals):  # the sum: one check, fast
+            raise DriverError(f"a {self.family} action must be finite, got {vals}")
         return out
 
     _bounds: tuple[list[float], list[float]] | None = None

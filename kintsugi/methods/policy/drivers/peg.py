@@ -60,7 +60,9 @@ class PegDriver(Driver):
             y1, z1 = y + (y1 - y) * self._v_lin / dist, z + (z1 - z) * self._v_lin / dist
         if abs(r1 - r) > self._v_rot * SLACK:
             r1 = r + math.copysign(self._v_rot, r1 - r)
-        self.world.set_base((y1, z1, r1))
+        p, q = self._mpos, self._mquat  # world.set_base((y1, z1, r1)), written item by item to its views
+        p[0], p[1], p[2] = 0.0, y1, z1
+        q[0], q[1], q[2], q[3] = math.cos(r1 / 2), math.sin(r1 / 2), 0.0, 0.0
 
     def _pose(self) -> tuple[float, float, float]:
         """`world.base_pose()` as floats, without building an array."""

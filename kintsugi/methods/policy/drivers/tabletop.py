@@ -67,7 +67,6 @@ class TabletopDriver(Driver):
         self._qidx = np.concatenate([*(i.qpos for i in ids), *(i.finger_qpos for i in ids)])
         self._sites = np.array([i.tcp for i in ids])
         self._site_ids = [int(i.tcp) for i in ids]
-        self._grip_act = [int(i.grip_act) for i in ids]
         d = self.world.data
         self._ctrl, self._qpos, self._xpos, self._xmat = d.ctrl, d.qpos, d.site_xpos, d.site_xmat
         """Views of the MjData buffers (fixed for the world's life), without a binding call per read."""
@@ -88,13 +87,9 @@ class TabletopDriver(Driver):
     def apply(self, action: Any) -> None:
         a = self.clip_values(action)
         w = self.world
-        ctrl = self._ctrl
-        ctrl[self._act] = a[0:6] + a[7:13]  # world.set_joint_targets for both arms at once
+        self._ctrl[self._act] = a[0:6] + a[7:13]  # world.set_joint_targets for both arms at once
         for i, arm in enumerate(ARMS):
-            travel = a[7 * i + 6] * self._full
-            # set_grip_travel unless it would change nothing (the same travel, already in force or held open)
-            if travel != w._grip_ctrl[arm] or (arm not in w._forced_open and ctrl[self._grip_act[i]] != travel):
-                w.set_grip_travel(arm, travel)
+            w.set_grip_travel(arm, a[7 * i + 6] * self._full)
 
     def command(self) -> np.ndarray:
         out: list[float] = []
@@ -195,12 +190,10 @@ class TabletopDriver(Driver):
         out = [0.0] * len(ARMS)
         if d.ncon == 0:
             return out
-        c = d.contact
         pads = self._pads
-        g1, g2 = c.geom1.tolist(), c.geom2.tolist()
         buf = np.empty(6)
         m = self.world.model
-        for i, (a, b) in enumerate(zip(g1, g2)):
+        for i, (a, b) in enumerate(d.contact.geom.tolist()):
             k = pads.get(a, pads.get(b))
             if k is None:
                 continue
