@@ -32,6 +32,8 @@ def run(
                                                   "truth: poses, frictions, masses, disturbances); the same "
                                                   "seed gives the same trial")] = 0,
     video: Annotated[Optional[Path], typer.Option(help="write an .mp4 or .gif of the scene camera")] = None,
+    viewer: Annotated[bool, typer.Option("--viewer", help="watch in MuJoCo's passive viewer (needs a display; "
+                                                          "over SSH see `kintsugi watch --live`)")] = False,
     record: Annotated[Optional[Path], typer.Option(
         help="trial record .json [default: runs/<task>__<method>__<variant>__<condition>__<seed>, then the "
              "reasoner when the trial asked it anything and a hash of any --config/--set values]")] = None,
@@ -63,8 +65,10 @@ def run(
         spec = expand(cfg)[0].model_copy(update={"video": str(check_video_path(video)) if video else None})
         path = check_output_file(record or _record_path(spec), "record", (".json",))
         check_output_file(record or _record_path(spec, reasoned=False), "record", (".json",))
+        from kintsugi.export.live import PassiveViewer
         from kintsugi.reasoning.preflight import preflight
 
+        watcher = PassiveViewer() if viewer else None  # no display: a one-line error before the trial
         for note in preflight([spec]):  # stops here when the endpoint cannot serve the method's roles
             err_console.print(escape(f"preflight: {note}"))
     except KintsugiError as exc:
@@ -72,11 +76,14 @@ def run(
         return
     console.rule(f"[bold]{escape(spec.key)}[/bold]")
     try:
-        result = run_trial(spec, echo=_echo)
+        result = run_trial(spec, echo=_echo, attach=watcher.attach if watcher else None)
     except KintsugiError as exc:  # e.g. the video could not be encoded: keep what is known
         result = failed_record(spec, f"{type(exc).__name__}: {exc}")
     except Exception as exc:  # noqa: BLE001 - a bug in a task: record it with its traceback, do not crash
         result = failed_record(spec, f"{type(exc).__name__}: {exc}\n{traceback.format_exc(limit=4)}")
+    finally:
+        if watcher is not None:
+            watcher.finish()
     path = record or _record_path(spec, reasoned=result.reasoning_calls > 0)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
