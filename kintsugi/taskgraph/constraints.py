@@ -11,34 +11,15 @@ relational `above`, `near` and `in_region` for sub-goals.
 
 from __future__ import annotations
 
-import math
-from typing import Annotated, Iterator, Literal, Union
+from typing import Annotated, Literal, Union
 
 from pydantic import Field, StrictBool, model_validator
 
-from kintsugi.taskgraph.base import GraphModel, Name, NonNeg, Num, Vec3
+from kintsugi.taskgraph.base import Name, NonNeg, Num, Vec3
 from kintsugi.taskgraph.features import Features
-from kintsugi.taskgraph.geometry import (NAN, Axes, Point, RefRole, head_yaw_deg, norm, top_tilt_deg, vector_feature,
-                                         wrap_deg)
-
-
-class _Template(GraphModel):
-    """Common interface; subclasses set `kind` and implement `evaluate` and `refs`."""
-
-    def evaluate(self, f: Features) -> float:  # pragma: no cover - abstract
-        raise NotImplementedError
-
-    def refs(self) -> Iterator[tuple[str, RefRole, str | None]]:  # pragma: no cover - abstract
-        """(entity, role, feature) for every name this template reads, for vocabulary checks."""
-        raise NotImplementedError
-
-    def bind(self, f: Features) -> "_Template":
-        """Fill references taken at edge start (see `drift`); others are returned unchanged."""
-        return self
-
-    @property
-    def bound(self) -> bool:
-        return True
+from kintsugi.taskgraph.footprints import LEVEL_AXIS, Heading, Within  # noqa: F401 - part of this module's API
+from kintsugi.taskgraph.geometry import NAN, Axes, Point, norm, top_tilt_deg, vector_feature
+from kintsugi.taskgraph.template import _Template
 
 
 class Drift(_Template):
@@ -336,64 +317,6 @@ class Touching(_Template):
         yield (self.arm, "arm", "touching")
         yield (self.object, "object", None)
 
-
-class Heading(_Template):
-    """A lying object's head points along `yaw_deg` (about the vertical, from +x): |angle off| - tol (degrees).
-    Judged only while no hand touches it: a hand over its middle hides the points the head rule reads
-    (a held spoon's perceived head flips end to end), so a held object reads NaN, undecided."""
-
-    kind: Literal["heading"] = "heading"
-    object: Name
-    yaw_deg: Annotated[float, Field(strict=True, ge=-180.0, le=180.0)]
-    tol_deg: Annotated[float, Field(strict=True, gt=0.0, le=180.0)]
-
-    def evaluate(self, f: Features) -> float:
-        obj = f.objects.get(self.object)
-        if obj is None or any(self.object in arm.touching for arm in f.arms.values()):
-            return NAN
-        yaw = head_yaw_deg(obj)
-        return NAN if yaw is None else abs(wrap_deg(yaw - self.yaw_deg)) - self.tol_deg
-
-    def refs(self):
-        yield (self.object, "object", "axis_pos")
-        yield (self.object, "object", "axis_neg")
-
-
-class Within(_Template):
-    """A point inside a container's perceived footprint, seen from above (a capsule in a tray): the larger
-    excursion beyond the footprint's half length (along its principal axis) and half width (across it), plus
-    `margin` (negative inside). The footprint is the container's perceived spans (`extent`: along its axis,
-    then the widest across), so a rectangle's corners count, not just the circle its width would draw; a
-    container with no horizontal axis (a standing cup) has a round footprint of its widest span across."""
-
-    kind: Literal["within"] = "within"
-    point: Point
-    container: Name
-    margin: NonNeg = 0.0
-
-    def evaluate(self, f: Features) -> float:
-        p, box = self.point.read(f), f.objects.get(self.container)
-        c, ext = vector_feature(box, "centroid"), vector_feature(box, "extent")
-        if p is None or c is None or ext is None:
-            return NAN
-        dx, dy = float(p[0]) - float(c[0]), float(p[1]) - float(c[1])
-        axis = vector_feature(box, "axis")
-        ux, uy = (float(axis[0]), float(axis[1])) if axis is not None else (0.0, 0.0)
-        n = math.hypot(ux, uy)
-        if n < LEVEL_AXIS:  # an upright axis: round
-            return math.hypot(dx, dy) - float(ext[1]) / 2 + self.margin
-        ux, uy = ux / n, uy / n
-        along, across = abs(dx * ux + dy * uy) - float(ext[0]) / 2, abs(dy * ux - dx * uy) - float(ext[1]) / 2
-        return max(along, across) + self.margin
-
-    def refs(self):
-        yield from self.point.refs()
-        yield (self.container, "object", "centroid")
-        yield (self.container, "object", "extent")
-
-
-LEVEL_AXIS = math.sin(math.radians(60.0))
-"""`Within`: an axis at least 60 degrees from vertical lies level enough to orient a footprint."""
 
 TEMPLATES: tuple[type[_Template], ...] = (
     Drift, Upright, Tilted, NotGrasped, Detached, Visibility, Misaligned, Near, Above, InRegion, Touching, Heading,
