@@ -12,7 +12,8 @@ date, commit and machine).
 
 Success is the ground-truth success rate with its Wilson 95 % interval; a cell "moved" when the rate
 differs by a whole percentage point or more, and the summary names the cells whose fresh rate lies outside the development interval.
-`--figure steps` also compares the mean episode steps (System B's `method_figures.episode_steps`).
+`--figure steps` also compares the mean episode steps (System B's `method_figures.episode_steps`) and the
+disturbances per trial (the event logs' drops and pushes: how hard the seeds were).
 With `--dev-table` the development figures are read from the first Markdown table under the heading
 line that contains HEADING TEXT: its `method`, `task`, `shape`/`variant` and `condition` columns name
 the cell (a missing column matches every value), and the first column whose header contains `G %` or
@@ -45,6 +46,7 @@ class Figure:
     n: int | None = None
     k: int | None = None
     steps: float | None = None
+    disturbances: float | None = None  # mean disturbance events per trial (drops, pushes), from the event logs
 
     def text(self) -> str:
         head = f"{self.rate:.0f} [{self.low:.0f}–{self.high:.0f}]"
@@ -75,8 +77,8 @@ def campaign_cells(dirs: list[str]) -> dict[tuple, Figure]:
         k = sum(bool(r.success) and r.error is None for r in rs)
         low, high = wilson_interval(k, len(rs))
         steps = [r.method_figures["episode_steps"] for r in rs if "episode_steps" in r.method_figures]
-        out[key] = Figure(100 * k / len(rs), 100 * low, 100 * high, len(rs), k,
-                          mean(steps) if steps else None)
+        out[key] = Figure(100 * k / len(rs), 100 * low, 100 * high, len(rs), k, mean(steps) if steps else None,
+                          mean(sum(e.kind == "disturbance" for e in r.events) for r in rs))
     return out
 
 
@@ -127,7 +129,8 @@ def _match(dev: dict[tuple, Figure], key: tuple) -> Figure | None:
 def compare(fresh: dict[tuple, Figure], dev: dict[tuple, Figure], steps: bool = False) -> list[str]:
     """Markdown: the cell-by-cell table, then the summary of what moved."""
     shown = [k for k in KEYS if len({key[KEYS.index(k)] for key in fresh}) > 1] or ["method"]
-    head = [*shown, "development", "fresh seeds", "change"] + (["steps: dev → fresh"] if steps else [])
+    head = [*shown, "development", "fresh seeds", "change"] + (
+        ["steps: dev → fresh", "disturbances per trial: dev → fresh"] if steps else [])
     lines = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
     moved, outside, unmatched, n_total, k_total = [], [], [], 0, 0
     for key, f in fresh.items():
@@ -147,6 +150,8 @@ def compare(fresh: dict[tuple, Figure], dev: dict[tuple, Figure], steps: bool = 
         if steps:
             ds = f"{d.steps:.0f}" if d is not None and d.steps is not None else "—"
             row.append(f"{ds} → {f.steps:.0f}" if f.steps is not None else "—")
+            dd = f"{d.disturbances:.2f}" if d is not None and d.disturbances is not None else "—"
+            row.append(f"{dd} → {f.disturbances:.2f}")
         lines.append("| " + " | ".join(row) + " |")
     low, high = wilson_interval(k_total, n_total) if n_total else (0.0, 1.0)
     lines += ["", "**What moved on the fresh seeds:**",

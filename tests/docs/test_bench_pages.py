@@ -97,7 +97,7 @@ def test_fresh_seeds_say_what_moved_against_campaigns_and_against_a_page_table(t
     page = tmp_path / "p.md"
     assert fresh_main([str(fresh), "--dev", str(dev), "--figure", "steps", "--page", str(page), "--name", "f"]) == 0
     text = page.read_text()
-    assert "| agentchord | 100 [72–100] (10/10) | 100 [72–100] (10/10) | 0 | 1004 → 1004 |" in text
+    assert "| agentchord | 100 [72–100] (10/10) | 100 [72–100] (10/10) | 0 | 1004 → 1004 | 0.00 → 0.00 |" in text
     assert "- rekep: 90 % → 50 % (-40 points; fresh 50 [24–76] (5/10)), outside the development interval" in text
     assert "- 1 cell unchanged; 1 outside the development interval (rekep)." in text
     assert "20 fresh trials, 15 successes overall" in text and "Written by `" in text
