@@ -87,3 +87,34 @@ def test_a_slide_is_done_only_on_its_goal_and_at_rest() -> None:
     assert not bool(program.call("slide_done", env))
     env.update(box_pos=first + np.array([0.0, 0.10, 0.0]), box_vel=np.array([0.0, 0.05, 0.0]))  # still sliding
     assert not bool(program.call("slide_done", env))
+
+
+def test_a_push_round_a_post_keeps_clear_of_it_and_goes_by_a_way_point_beside_it() -> None:
+    import numpy as np
+
+    from kintsugi.methods.coral.formulate import sample_env
+
+    req = scene_request("around", "Push the red box onto the green disc without touching the grey post.")
+    plan = plan_instruction(req)
+    via = next(p for p in plan.primitives if "via=" in p)
+    x, y = (float(v) for v in via.split("via=")[1].split()[0].split(","))
+    post = req.fixtures[0]
+    assert post.lo_m[0] <= x <= post.hi_m[0] and abs(y) > post.hi_m[1] + 0.05  # beside the post, clear of it
+    reply = compose(req)
+    program = CostProgram.compile(reply.source, request_variables(req))
+    env = sample_env(req, ())
+    on_post = np.array([0.10, 0.0, 0.025])
+    assert float(program.call("clear_post_box", {**env, "box_pos": on_post})) > 0.05
+    assert float(program.call("clear_post_box", {**env, "box_pos": np.array([0.10, 0.12, 0.025])})) == 0.0
+    assert float(program.call("clear_post_hand", {**env, "tcp": np.array([0.10, 0.03, 0.05])})) > 0.0
+    # told nothing about the post, the push goes straight
+    straight = plan_instruction(scene_request("around", "Push the red box onto the green disc."))
+    assert not any("via=" in p for p in straight.primitives)
+
+
+def test_without_a_contact_strategy_the_grasp_has_no_side_or_height_chosen() -> None:
+    with_strategy = compose(scene_request("clutter", "Pick up the box."))
+    blind = compose(scene_request("clutter", "Pick up the box.", contact=False))
+    assert "start_cube0_pos" in with_strategy.source and "start_cube0_pos" not in blind.source
+    assert "def box_aim(start_yaw):" in blind.source and "finger_length / 3.0" not in blind.source
+    assert [s.name for s in blind.stages] == [s.name for s in with_strategy.stages]
