@@ -23,17 +23,18 @@ setup: $(VENV)/.test-installed
 
 DEMO := runs/demo
 demo-a: $(BIN)/kintsugi
-	$(BIN)/kintsugi bench peg-insertion --methods baseline,recovery --shapes round,square,rectangle \
+	-$(BIN)/kintsugi bench peg-insertion --methods baseline,recovery --shapes round,square,rectangle \
 		--conditions all --trials 5 --executor inline --videos-per-cell 1 --out $(DEMO)/a-peg-insertion
 demo-b: $(BIN)/kintsugi
-	$(BIN)/kintsugi bench pour-single --methods rekep,agentchord --conditions drop \
+	-$(BIN)/kintsugi bench pour-single --methods rekep,agentchord --conditions drop \
 		--set disturbance.drop_p=0.3 --trials 3 --executor inline --videos-per-cell 1 --out $(DEMO)/b-pour-single
 demo-c: $(BIN)/kintsugi
-	$(BIN)/kintsugi bench flip-box --methods coral,l2r --trials 1 --executor inline --videos-per-cell 1 \
+	-$(BIN)/kintsugi bench flip-box --methods coral,l2r --trials 1 --executor inline --videos-per-cell 1 \
 		--out $(DEMO)/c-flip-box
 
 # The three campaigns run side by side, each in one process (no worker pool to start); each prints its tables
-# and writes its report when it ends, then one index links the three.
+# and writes its report when it ends, then one index links the three. A trial that errors is reported by its
+# campaign (and counts as a failure) without stopping the tour.
 demo: $(BIN)/kintsugi
 	@echo "running A, B and C side by side: each prints its tables when it ends"
 	@$(MAKE) --no-print-directory -j3 --output-sync=target demo-a demo-b demo-c
