@@ -9,7 +9,9 @@ held command (so the physics is the same trajectory), one by raw ticks and one b
 the ratio is taken per repeat and the median of the repeats is reported with their range. Times are the process's CPU time (`time.process_time`), so that the other
 programs sharing the machine's cores do not count as either's cost. `--profile` adds the cProfile of `env.step` per family.
 
-    .venv/bin/python bench/bench_gym.py [--steps 400] [--repeats 7] [--profile]
+    .venv/bin/python bench/bench_gym.py [--steps 400] [--repeats 7] [--profile] [--no-page]
+
+Writes its table into docs/datasets.md (block `bench_gym`) unless `--no-page`.
 """
 
 from __future__ import annotations
@@ -28,6 +30,8 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 os.environ.setdefault("MUJOCO_GL", "egl")
 
 import gymnasium as gym  # noqa: E402
+
+from bench.pages import Block, command_line, write_block  # noqa: E402
 
 import kintsugi.gym  # noqa: E402,F401
 
@@ -94,19 +98,29 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=7)
     ap.add_argument("--chunk", type=int, default=20, help="control periods per alternating chunk")
     ap.add_argument("--profile", action="store_true")
+    ap.add_argument("--no-page", action="store_true", help="print only; do not write docs/datasets.md")
     args = ap.parse_args()
     load = os.getloadavg()[0] if hasattr(os, "getloadavg") else float("nan")
     print(f"machine: {platform.machine()} {platform.processor() or ''} {os.cpu_count()} cores, load {load:.2f}; "
           f"python {platform.python_version()}; {args.steps} control steps x {args.repeats} repeats in chunks of "
           f"{args.chunk}, no rendering")
+    lines = ["| family | environment | control rate | raw tick (us) | env.step (us) | ratio (median, range) |",
+             "|---|---|---|---|---|---|"]
     for family, eid in FAMILIES.items():
         m = measure(eid, args.steps, args.repeats, args.chunk)
-        print(f"{family:9s} {eid:26s} {m['hz']:4.0f} Hz, scored every {m['score_s']:g} s  raw {m['raw_us']:7.1f} us/step  "
-              f"env {m['env_us']:7.1f} us/step  ratio {m['ratio']:.2f} (repeats {m['lo']:.2f}-{m['hi']:.2f})")
+        print(f"{family:9s} {eid:26s} {m['hz']:4.0f} Hz, scored every {m['score_s']:g} s  raw {m['raw_us']:7.1f} "
+              f"us/step  env {m['env_us']:7.1f} us/step  ratio {m['ratio']:.2f} (repeats {m['lo']:.2f}-{m['hi']:.2f})")
+        lines.append(f"| {family} | `{eid}` | {m['hz']:.0f} Hz | {m['raw_us']:.1f} | {m['env_us']:.1f} | "
+                     f"{m['ratio']:.2f} ({m['lo']:.2f}-{m['hi']:.2f}) |")
         if args.profile:
             env = gym.make(eid, images=False, max_seconds=1e6).unwrapped
             profile(env, args.steps)
             env.close()
+    lines += ["", f"CPU time per control period, {args.steps} periods x {args.repeats} repeats in alternating chunks of "
+              f"{args.chunk}, no images, the scorer every {m['score_s']:g} s of sim time (the default); load average {load:.1f} "
+              "when it ran (the machine's other programs inflate Python's share more than the physics')."]
+    if not args.no_page:
+        write_block(Path(__file__).resolve().parents[1] / "docs" / "datasets.md", Block("bench_gym", command_line(), lines))
 
 
 if __name__ == "__main__":
