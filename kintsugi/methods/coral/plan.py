@@ -100,6 +100,8 @@ class Planner:
         self.held: str | None = None
         self.over_edge: set[str] = set()
         self.pushed_to: dict[str, str] = {}
+        self.moved: set[str] = set()
+        """Objects a primitive other than a slide has moved (a later distance has no known origin)."""
         self.where: dict[str, tuple] = {}
         """Where a slide left an object (the next leg starts there)."""
         self.avoid: set[str] = set()
@@ -113,6 +115,8 @@ class Planner:
 
     def add(self, builder: str, o: ObjectState | None, prims: list[Primitive], **args: object) -> None:
         self.segments.append(Segment(builder, o.name if o else None, prims, dict(args)))
+        if o is not None and builder not in ("slide", "hold"):
+            self.moved.add(o.name)
 
     # --- verbs ----------------------------------------------------------------------------------------------
     def pick(self, s: Step) -> None:
@@ -226,8 +230,9 @@ class Planner:
             if not 0.005 <= d <= MAX_PUSH_M:
                 raise NotUnderstood(f"not understood: {s.words!r}: a push of {d * 100:g} cm (the language pushes "
                                     f"0.5 to {MAX_PUSH_M * 100:g} cm)")
-            if origin[0] != "first":
-                raise NotUnderstood(f"not understood: {s.words!r}: a push by a distance after one onto a marker")
+            if origin[0] != "first" or o.name in self.moved:
+                raise NotUnderstood(f"not understood: {s.words!r}: a push by a distance measures from where the object "
+                                    "starts; after another move of it, give a target instead (a fixture or a marker)")
             step = [0.0, 0.0]
             step[axis] = sign * d
             goal = ("first", round(origin[1] + step[0], 4), round(origin[2] + step[1], 4))
