@@ -165,7 +165,11 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
                     return self.fall_back(edge, f"its merge check failed {merge_fails} times" if merge_fails
                                           >= MERGE_FAILS else f"it was run {reruns} times")
                 # else a recovery that was itself disturbed (a drop, a missed grasp) runs again
-        return self.goal_holds()
+        if self.goal_holds():
+            return True
+        if self.replan is None or self.metrics.replans >= self.config.max_replans:
+            return False
+        return self._replan("the goal check failed at the end of the graph")  # e.g. a stand-up set it elsewhere
 
     def fall_back(self, edge: Edge, reason: str = f"its merge check failed {MERGE_FAILS} times") -> Any:
         """Re-plan from the current observation (`replan`, at most `max_replans` times): REPLANNED with the new
