@@ -1,7 +1,7 @@
 """The policy method replays a recorded trial's low-level commands through the step-level drivers and
 reproduces it step for step (physics steps, scored success, the source's verdict): peg (recovery under
-the paper's randomization), contact (a two-attempt pusher with a restart between), tabletop (a drop
-disturbance timed by the source's atomic actions)."""
+the paper's randomization), contact (a two-attempt pusher with a restart between), tabletop (a four-action lift
+with a drop disturbance timed by the source's atomic actions; in the slow set, an AgentChord trial that recovers)."""
 
 from __future__ import annotations
 
@@ -40,6 +40,25 @@ if "test-two-pushes" not in METHODS:
     METHODS.register("test-two-pushes", "test only", tags=("system-c",))(_TwoPushes)
 
 
+class _LiftBottle:
+    """A tabletop 'method' for the test: grasp the bottle, lift it, set it down, let go (four atomic actions)."""
+
+    def __init__(self, ctx, settings) -> None:  # noqa: ANN001
+        pass
+
+    def run(self, robot, log) -> bool:  # noqa: ANN001
+        for action in ({"action": "grasp", "arm": "right", "obj": "bottle"},
+                       {"action": "move_by_offset", "arm": "right", "dxyz": [0.0, 0.0, 0.08]},
+                       {"action": "move_by_offset", "arm": "right", "dxyz": [0.0, 0.0, -0.07]},
+                       {"action": "open_gripper", "arm": "right"}):
+            robot.execute(action)
+        return False
+
+
+if "test-lift-bottle" not in METHODS:
+    METHODS.register("test-lift-bottle", "test only", tags=("system-b",))(_LiftBottle)
+
+
 def _record_and_replay(spec: TrialSpec, tmp_path: Path):  # noqa: ANN202
     rec = TickRecorder()
     source = run_trial(spec, attach=rec.attach)
@@ -65,6 +84,17 @@ def test_contact_restarts_replay_step_for_step(tmp_path: Path) -> None:
     assert traj.restarts == [40] and len(traj.actions) == 80
     assert again.physics_steps == source.physics_steps
     assert again.task_figures == source.task_figures
+
+
+def test_tabletop_trial_with_a_drop_replays_with_its_action_starts(tmp_path: Path) -> None:
+    spec = TrialSpec(task="pour-single", method="test-lift-bottle", variant="default", condition="drop", seed=0,
+                     overrides={"disturbance.drop_p": 1.0})
+    source, again, traj = _record_and_replay(spec, tmp_path)
+    assert len(traj.marks) == 4  # the four atomic actions' starts, where the drop draws are made
+    drops = [e.detail for e in source.events if e.kind == "disturbance"]
+    assert drops and drops == [e.detail for e in again.events if e.kind == "disturbance"]
+    assert again.physics_steps == source.physics_steps and again.success == source.success
+    assert again.task_figures == source.task_figures and again.params == source.params
 
 
 @pytest.mark.slow
