@@ -91,10 +91,10 @@ def test_slide_puck_scripted_push_succeeds_and_a_carried_puck_fails() -> None:
 def test_roll_cylinder_scripted_push_rolls_it_and_a_dragged_cylinder_fails() -> None:
     _, world, scorer, setup = _episode("roll-cylinder", 3)
     r = setup.scene.geometry["cylinder"].parts[0].radius
-    _push_onto_goal(world, scorer, setup, "cylinder", r)
+    _push_onto_goal(world, scorer, setup, "cylinder", 1.5 * r)  # above its axis: it rolls
     ok, details = scorer.finish(world)
     assert ok, details
-    assert details.roll_deg > 180
+    assert details.roll_deg > 300
     # put on the disc without turning about its axis: dragged, not rolled
     _, world, scorer, setup = _episode("roll-cylinder", 3)
     m = setup.scene.markers["goal"]
