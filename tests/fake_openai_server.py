@@ -13,7 +13,8 @@ Like a real server, it answers the backend's capability preflight on its own: a 
 `max_tokens` (<= 64; the backend sends none unless `reasoner.options.max_reply_tokens` is set) gets a
 short reply (JSON, or a tool call when tools are required), usage counted from the request's size
 (85 tokens per image), and lands in `server.probes`, not in `server.requests`; strict options it refuses
-are refused there too. `images=False` makes it refuse image inputs as llama.cpp's server does (HTTP 500).
+are refused there too. `images=False` makes it refuse image inputs as llama.cpp's server does (HTTP 500);
+`context=N` refuses probes longer than N tokens as llama.cpp's server does (HTTP 400 naming n_ctx).
 """
 
 from __future__ import annotations
@@ -79,8 +80,10 @@ def hang(seconds: float) -> Script:
 class FakeOpenAIServer:
     """Threaded stdlib HTTP server on 127.0.0.1 with a random free port."""
 
-    def __init__(self, refuse: Iterable[str] = (), refuse_status: int = 400, images: bool = True) -> None:
+    def __init__(self, refuse: Iterable[str] = (), refuse_status: int = 400, images: bool = True,
+                 context: int | None = None) -> None:
         self.refuse = set(refuse)
+        self.context = context
         unknown = self.refuse - REFUSALS.keys()
         if unknown:
             raise ValueError(f"cannot refuse {sorted(unknown)}; known: {sorted(REFUSALS)}")
@@ -150,6 +153,10 @@ class FakeOpenAIServer:
                             for p in m["content"]])
         script = tool_calls(("probe", {"ok": True})) if body.get("tool_choice") == "required" else content({"ok": True})
         script.usage = (len(text) // 4 + 85 * images, 1)
+        if self.context is not None and script.usage[0] > self.context:
+            return 400, {"error": {"code": 400, "message": "the request exceeds the available context size, try "
+                                   "increasing it", "type": "exceed_context_size_error",
+                                   "n_prompt_tokens": script.usage[0], "n_ctx": self.context}}
         return 200, _completion(body, script)
 
     def _handler_class(self) -> type[BaseHTTPRequestHandler]:

@@ -27,7 +27,7 @@ from kintsugi.campaign.executors import failed_record, make_executor
 from kintsugi.campaign.plan import CampaignConfig, expand, validate
 from kintsugi.campaign.store import ResultStore
 from kintsugi.core.record import TrialRecord, TrialSpec
-from kintsugi.reasoning.preflight import preflight
+from kintsugi.reasoning.preflight import prepare
 
 
 def _progress(console: Console, enabled: bool) -> Progress:
@@ -73,7 +73,8 @@ def run_campaign(
     todo = [s for s in specs if s.key not in records]
 
     console = console or Console(stderr=True, soft_wrap=True)
-    for note in preflight(todo):  # a model endpoint that cannot serve the methods stops the campaign here
+    notes, todo = prepare(todo)  # an endpoint that cannot serve the methods stops the campaign here; the trials
+    for note in notes:  # then carry what it learnt (reasoner.options.learnt) to the workers
         console.print(escape(f"preflight: {note}"))
     ok = sum(r.success for r in records.values())
     err = sum(r.error is not None for r in records.values())

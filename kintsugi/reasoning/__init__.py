@@ -36,8 +36,10 @@ def load_builtin_backends() -> None:
 def make_reasoner(settings: "ReasonerSettings") -> "Reasoner":
     """Build the backend named by `settings.backend` (unknown names list the known ones)."""
     load_builtin_backends()
+    from kintsugi.reasoning.first_requests import wrap
+
     entry = REASONERS.get(settings.backend)
-    return entry.factory(settings, backend_options(entry, settings.options))
+    return wrap(entry.factory(settings, backend_options(entry, settings.options)))
 
 
 __all__ = ["REASONERS", "NoSettings", "ReasonerFactory", "backend_options", "load_builtin_backends",

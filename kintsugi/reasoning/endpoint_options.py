@@ -10,6 +10,18 @@ from pydantic import Field
 from kintsugi.core.config import StrictModel
 
 
+class Learnt(StrictModel):
+    """What a campaign's preflight learnt about the endpoint, once, in the campaign's process; every trial's
+    settings carry it to the worker processes, so no trial finds it out again."""
+
+    text_mode: dict[Literal["json_schema", "tools"], str] = Field(default_factory=dict)
+    """Strict options the server refused or ignored (with its answer): asked for in text from the first call."""
+    context_tokens: int | None = None
+    """The model's context length, where the preflight could tell."""
+    images: str = "sent"
+    """"sent" (the endpoint takes them), or what is sent instead and why."""
+
+
 class OpenAIOptions(StrictModel):
     """What the openai backend sends and what it checks first."""
 
@@ -25,3 +37,5 @@ class OpenAIOptions(StrictModel):
     """Ask the endpoint what it can do (images, strict options, context) before a campaign's first trial."""
     context_tokens: int | None = Field(default=None, ge=256)
     """The model's context length, for servers that do not report it (llama.cpp's server and vLLM do)."""
+    learnt: Learnt | None = None
+    """Set by a campaign's preflight for its trials (not by hand): what it learnt about the endpoint."""

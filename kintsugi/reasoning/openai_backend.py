@@ -22,7 +22,7 @@ from __future__ import annotations
 import base64
 import json
 import os
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from typing import Any
 from urllib.parse import urlparse
 
@@ -40,6 +40,7 @@ from kintsugi.reasoning.structured import (  # noqa: F401 - EndpointError, stric
     EndpointError,
     StructuredClient,
     StructuredOutput,
+    format_instructions,
     strict_schema,
 )
 
@@ -48,6 +49,18 @@ DEFAULT_OPENAI_MODEL = "gpt-4o"
 """The model the paper used; only a default when talking to OpenAI itself."""
 PLACEHOLDER_KEY = "sk-local-no-key"
 """Local servers ignore the key, but the SDK insists on one."""
+
+
+@dataclass(frozen=True)
+class Outgoing:
+    """One call's first request as it goes out: messages (images as data URLs), the strict options sent
+    with them, the text of its parts by name, and the image URLs."""
+
+    role: str
+    messages: list[dict[str, Any]]
+    options: dict[str, Any]
+    parts: dict[str, str]
+    images: list[str]
 
 
 def _is_openai(base_url: str | None) -> bool:
@@ -94,6 +107,8 @@ class OpenAIReasoner:
                                            timeout_s=timeout_s, structured_output=structured_output,
                                            max_retries=max_retries, max_reply_tokens=self.options.max_reply_tokens)
         self._images = (0, 0)
+        if self.options.learnt is not None:
+            self.structured.learnt(dict(self.options.learnt.text_mode))
 
     @property
     def sees_images(self) -> bool:
@@ -108,21 +123,19 @@ class OpenAIReasoner:
     def last_stats(self, value: CallStats | None) -> None:
         self.structured.last_stats = value
 
-    def preflight(self, roles: dict[str, list[Role]]) -> list[str]:
-        """Ask the endpoint once what it can do for these roles (by method); raises CapabilityError with one
-        line when it cannot serve them, else returns notes (what was learnt, what will fall back)."""
+    def preflight(self, roles: dict[str, list[Role]], trials: dict[str, Any] | None = None) -> Any:
+        """Ask the endpoint once what it can do for these roles (by method; `trials`: each method's first trial,
+        whose first requests are counted); raises CapabilityError with one line when it cannot serve them, else
+        returns the `Findings` (notes, and what the trials are told)."""
         from kintsugi.reasoning.preflight import check_endpoint
 
-        return check_endpoint(self, roles)
+        return check_endpoint(self, roles, trials)
 
     def answer(self, role: Role, request: BaseModel, check: Check | None = None) -> BaseModel:
         """The role's system prompt as the system message, its prompt plus the request (images attached) as
         the user message -> a validated, checked reply (strict or text output and one repair round come from
         `structured`)."""
-        messages: list[dict[str, Any]] = [
-            {"role": "system", "content": role.system_text()},
-            {"role": "user", "content": self._user_content(role, request)},
-        ]
+        messages = self.messages(role, request)
         tools = role.tools(request) if role.tools is not None else None
         sent, withheld = self._images
         try:
@@ -132,6 +145,29 @@ class OpenAIReasoner:
             if self.structured.last_stats is not None:
                 self.structured.last_stats = replace(self.structured.last_stats, images_sent=sent,
                                                      images_withheld=withheld)
+
+    def messages(self, role: Role, request: BaseModel) -> list[dict[str, Any]]:
+        """The system and user messages of a call (images fitted to the size sent)."""
+        return [{"role": "system", "content": role.system_text()},
+                {"role": "user", "content": self._user_content(role, request)}]
+
+    def outgoing(self, role: Role, request: BaseModel) -> Outgoing:
+        """Exactly what the first attempt of `answer(role, request)` sends, and its parts by name (what the
+        preflight counts)."""
+        messages = self.messages(role, request)
+        tools = role.tools(request) if role.tools is not None else None
+        sent, options = self.structured.first_attempt(messages, role.reply, tools)
+        user = messages[1]["content"]
+        text = user if isinstance(user, str) else user[0]["text"]
+        prompt = role.prompt_text()
+        parts = {"system prompt": role.system_text(), "role prompt": prompt,
+                 "request data": text[len(prompt):] if text.startswith(prompt) else text}
+        if "tools" in options:
+            parts["tool definitions"] = json.dumps(options["tools"])
+        if not options:
+            parts["answer format"] = format_instructions(role.reply, tools)
+        images = [p for p in user if p.get("type") == "image_url"] if isinstance(user, list) else []
+        return Outgoing(role.name, sent, options, parts, [p["image_url"]["url"] for p in images])
 
     # --- internals ---------------------------------------------------------
     def _user_content(self, role: Role, request: BaseModel) -> str | list[dict[str, Any]]:

@@ -26,7 +26,9 @@ from typing import Any, Iterable, Iterator, Literal
 from pydantic import BaseModel
 
 from kintsugi.core.errors import ConfigError
+from kintsugi.reasoning.endpoint_options import Learnt
 from kintsugi.reasoning.images import image_tokens
+from kintsugi.reasoning.request_size import TooLong, check_first_requests
 from kintsugi.reasoning.roles import ROLES, Role
 from kintsugi.reasoning.structured import format_instructions
 from kintsugi.reasoning.transport import ContextTooLong, EndpointError, ImagesRefused, Refused, send
@@ -94,40 +96,72 @@ def _image_fields(tp: Any, required: bool, seen: set[Any]) -> Iterator[bool]:
                 yield from _image_fields(arg, required and not container, seen)
 
 
+@dataclass
+class Findings:
+    """A preflight's result for one endpoint: notes for the user, and what the trials are told (`Learnt`)."""
+
+    notes: list[str]
+    learnt: Learnt
+
+
 def preflight(specs: Iterable[Any]) -> list[str]:
     """Check every distinct endpoint of these trial specs once; CapabilityError stops the campaign."""
+    return prepare(list(specs))[0]
+
+
+def prepare(specs: list[Any]) -> tuple[list[str], list[Any]]:
+    """(notes, the specs with what the preflight learnt in their reasoner options): the campaign's process
+    checks each endpoint once, and its worker processes start from the findings."""
     from kintsugi.core.resolve import resolve
     from kintsugi.reasoning import make_reasoner
 
-    groups: dict[str, tuple[Any, dict[str, list[Role]]]] = {}
-    seen: set[str] = set()
+    groups: dict[str, tuple[Any, dict[str, list[Role]], dict[str, Any]]] = {}
+    keys: dict[str, str | None] = {}
+    of_spec: list[str | None] = []
     for spec in specs:
         kind = json.dumps([spec.task, spec.method, spec.overrides, spec.reasoner.model_dump()], default=str)
-        if spec.reasoner.backend == "embedded" and not spec.overrides or kind in seen:
-            continue
-        seen.add(kind)
-        _, entry, _, _, settings = resolve(spec)
-        if settings.backend == "embedded":
-            continue
-        key = settings.model_dump_json()
-        groups.setdefault(key, (settings, {}))[1][entry.name] = roles_of(entry)
+        if kind not in keys:
+            keys[kind] = None
+            if spec.reasoner.backend != "embedded" or spec.overrides:
+                _, entry, _, _, settings = resolve(spec)
+                if settings.backend != "embedded":
+                    keys[kind] = settings.model_dump_json()
+                    group = groups.setdefault(keys[kind], (settings, {}, {}))
+                    group[1][entry.name] = roles_of(entry)
+                    group[2].setdefault(entry.name, spec)
+        of_spec.append(keys[kind])
     notes: list[str] = []
-    for settings, methods in groups.values():
+    learnt: dict[str, Learnt] = {}
+    for key, (settings, methods, trials) in groups.items():
         if not any(methods.values()):
             continue
         reasoner = make_reasoner(settings)
         check = getattr(reasoner, "preflight", None)
-        if check is not None and getattr(getattr(reasoner, "options", None), "preflight", True):
-            notes += check({m: r for m, r in methods.items() if r})
-    return notes
+        if check is None or not getattr(getattr(reasoner, "options", None), "preflight", True):
+            continue
+        found = check({m: r for m, r in methods.items() if r}, trials)
+        if isinstance(found, Findings):
+            notes += found.notes
+            learnt[key] = found.learnt
+        else:  # a backend's own preflight may return notes only
+            notes += list(found or [])
+    out = []
+    for spec, key in zip(specs, of_spec):
+        if key in learnt:
+            options = {**spec.reasoner.options, "learnt": learnt[key].model_dump()}
+            spec = spec.model_copy(update={"reasoner": spec.reasoner.model_copy(update={"options": options})})
+        out.append(spec)
+    return notes, out
 
 
-def check_endpoint(reasoner: Any, roles: dict[str, list[Role]]) -> list[str]:
-    """The openai backend's preflight: probe once, compare with each method's roles (see module doc)."""
+def check_endpoint(reasoner: Any, roles: dict[str, list[Role]], trials: dict[str, Any] | None = None) -> Findings:
+    """The openai backend's preflight: probe once, compare with each method's roles, count each role's first
+    request on the method's first trial (`trials`; without one, its fixed prompts) (see module doc)."""
     caps = probe(reasoner)
     send_images = reasoner.options.images == "send"
     label = f"{caps.where} (model {reasoner.model})"
     notes: list[str] = []
+    text_mode: dict[str, str] = {}
     if caps.images is not None:
         needing = {m: [r.name for r in rs if image_use(r) != "none"] for m, rs in roles.items()}
         needing = {m: names for m, names in needing.items() if names}
@@ -147,9 +181,30 @@ def check_endpoint(reasoner: Any, roles: dict[str, list[Role]]) -> list[str]:
         if mode == "strict":
             raise CapabilityError(f"{label} does not honour {what} ({refusal}); {_who(needing)} need it with "
                                   f"--structured-output strict: use --structured-output auto or text")
+        text_mode[option] = f"{what}: {refusal}"
         notes.append(f"{label} does not honour {what} ({refusal}); {_who(needing)} will ask for JSON in text")
-    notes += _check_context(reasoner, caps, roles, label, send_images)
-    return notes
+    images = "sent" if send_images else "measurements instead (reasoner.options.images)" + (
+        f"; {caps.images}" if caps.images else "")
+    learnt = Learnt(text_mode=text_mode, context_tokens=caps.n_ctx, images=images)
+    counted: dict[str, set[str]] = {}
+    reply_tokens = reasoner.options.max_reply_tokens or REPLY_ALLOWANCE
+    for method, spec in (trials or {}).items():
+        if not roles.get(method):
+            continue
+        options = {**spec.reasoner.options, "learnt": learnt.model_dump()}
+        dry = spec.model_copy(update={"reasoner": spec.reasoner.model_copy(update={"options": options})})
+        try:
+            found, counted[method] = check_first_requests(
+                lambda m, o: _ask(reasoner, m, o), dry, method, [r.name for r in roles[method]], caps.n_ctx,
+                caps.n_ctx_source, reply_tokens, label)
+        except TooLong as exc:
+            raise CapabilityError(str(exc)) from None
+        except EndpointError as exc:
+            raise CapabilityError(f"preflight of {method}'s first requests at {label}: {exc}") from None
+        notes += found
+    rest = {m: [r for r in rs if r.name not in counted.get(m, set())] for m, rs in roles.items()}
+    notes += _check_context(reasoner, caps, rest, label, send_images)
+    return Findings(notes, learnt)
 
 
 def _who(needing: dict[str, list[str]]) -> str:
@@ -291,4 +346,5 @@ def _required_images(model: type[BaseModel]) -> int:
     return max(1, sum(_image_fields(model, True, set())))
 
 
-__all__ = ["CapabilityError", "Capabilities", "check_endpoint", "image_use", "preflight", "probe", "roles_of"]
+__all__ = ["CapabilityError", "Capabilities", "Findings", "check_endpoint", "image_use", "prepare", "preflight", "probe",
+           "roles_of"]

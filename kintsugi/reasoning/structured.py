@@ -128,6 +128,8 @@ class StructuredClient:
         self.structured_output: StructuredOutput = structured_output
         self.text_only: dict[Option, str] = {}
         """Options moved to text mode (auto), with the reason; kept for the client's life."""
+        self.preset: dict[Option, str] = {}
+        """Options in text mode from the start: the campaign's preflight found the server refuses them."""
         self.last_stats: CallStats | None = None
 
     def mode_for(self, option: Option) -> Mode:
@@ -147,7 +149,7 @@ class StructuredClient:
         mode = self.mode_for(option)
         msgs = with_instructions(messages, fmt) if mode == "text" else [dict(m) for m in messages]
         tokens_in = tokens_out = 0
-        note: str | None = None
+        note: str | None = self._preset_note(option) if mode == "text" else None
         problem = ""
 
         def stats(attempt: int) -> CallStats:
@@ -199,7 +201,28 @@ class StructuredClient:
             + (f"Try a stronger model or check the prompt in {prompt}" if prompt else "Try a stronger model")
         )
 
+    def first_attempt(self, messages: list[dict[str, Any]], reply: type[BaseModel],
+                      tools: ToolRoute | None = None) -> tuple[list[dict[str, Any]], dict[str, Any]]:
+        """(messages, options) of the first request `ask` sends for these messages, in the mode in effect."""
+        option: Option = "tools" if tools is not None else "json_schema"
+        mode = self.mode_for(option)
+        if mode == "text":
+            return with_instructions(messages, format_instructions(reply, tools)), {}
+        return [dict(m) for m in messages], self._options(mode, reply, tools)
+
+    def learnt(self, text_only: dict[Option, str]) -> None:
+        """Start with these options in text mode (what a campaign's preflight learnt about the server)."""
+        for option, why in text_only.items():
+            self.text_only[option] = why
+            self.preset[option] = why
+
     # --- internals ---------------------------------------------------------
+    def _preset_note(self, option: Option) -> str | None:
+        if self.structured_output == "text" or option not in self.preset:
+            return None
+        what = "tool_choice=\"required\"" if option == "tools" else "response_format json_schema"
+        return f"{what}: text mode from the preflight ({self.preset[option]})"
+
     def _to_text(self, option: Option, why: str) -> str:
         self.text_only[option] = why
         what = "tool_choice=\"required\"" if option == "tools" else "response_format json_schema"
