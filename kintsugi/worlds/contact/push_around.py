@@ -24,7 +24,7 @@ class PushAroundConfig(ContactConfig):
                                           label="grey post")
     goal: MarkerSection = MarkerSection(x_m=(0.19, 0.22), y_m=(-0.02, 0.02), radius_m=0.035, label="green disc")
     scoring: GoalScoring = GoalScoring(avoid=("post",))
-    control: ControlSection = ControlSection(episode_s=16.0)
+    control: ControlSection = ControlSection(episode_s=22.0)
 
 
 TASK = ContactTaskDef(

@@ -24,7 +24,7 @@ class RollCylinderConfig(ContactConfig):
     goal: MarkerSection = MarkerSection(x_m=(0.14, 0.20), y_m=(-0.02, 0.02), radius_m=0.04, label="blue disc",
                                         rgba=(0.15, 0.35, 0.9, 0.45))
     scoring: GoalScoring = GoalScoring(lying=True, min_roll_deg=180.0)
-    control: ControlSection = ControlSection(episode_s=10.0)
+    control: ControlSection = ControlSection(episode_s=16.0)
 
 
 TASK = ContactTaskDef(

@@ -20,7 +20,7 @@ class SlidePuckConfig(ContactConfig):
         mass_kg=(0.15, 0.35), friction=(0.3, 0.5), x_m=(-0.06, 0.0), y_m=(-0.06, 0.06), colour="red")
     goal: MarkerSection = MarkerSection(x_m=(0.13, 0.19), y_m=(-0.06, 0.06), radius_m=0.03, label="green disc")
     scoring: GoalScoring = GoalScoring(max_tilt_deg=15.0)
-    control: ControlSection = ControlSection(episode_s=10.0)
+    control: ControlSection = ControlSection(episode_s=16.0)
 
 
 TASK = ContactTaskDef(
