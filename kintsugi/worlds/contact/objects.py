@@ -149,7 +149,7 @@ class Geometry(StrictModel):
 
     @property
     def shape(self) -> str:
-        """The first part's shape, or `two-part` etc. for an object of several parts."""
+        """The shape of a one-part object; `2-part`, `3-part`, ... for an object of several parts (a board)."""
         return self.parts[0].shape if len(self.parts) == 1 else f"{len(self.parts)}-part"
 
     def support(self, d: np.ndarray) -> np.ndarray:
