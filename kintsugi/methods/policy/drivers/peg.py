@@ -99,7 +99,8 @@ class PegDriver(Driver):
         return out
 
     def observe(self, images: bool = True) -> dict[str, np.ndarray]:
-        obs = {"base_pose": np.array(self._pose()), "wrist_force": np.array([self.robot.wrist_force_z()])}
+        v = np.array((*self._pose(), self.robot.wrist_force_z()))  # one array, the entries are views of it
+        obs = {"base_pose": v[0:3], "wrist_force": v[3:4]}
         if images:
             obs["image"] = self.world.render()
         return obs
