@@ -112,7 +112,7 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
                 try:
                     outcome = self._traverse()
                 except Unreachable as exc:  # re-planned from where things are now, the other arm may reach
-                    if self.replan is None or self.metrics.replans >= self.config.max_replans:
+                    if not self._may_replan():
                         raise
                     self.log.event(self.robot.sim_time, "unreachable", str(exc))
                     outcome = self._replan(f"{exc.args[0].split(':')[0]} is out of reach")
@@ -167,7 +167,7 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
                 # else a recovery that was itself disturbed (a drop, a missed grasp) runs again
         if self.goal_holds():
             return True
-        if self.replan is None or self.metrics.replans >= self.config.max_replans:
+        if not self._may_replan():
             return False
         return self._replan("the goal check failed at the end of the graph")  # e.g. a stand-up set it elsewhere
 
@@ -175,6 +175,11 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
         """Re-plan from the current observation (`replan`, at most `max_replans` times): REPLANNED with the new
         graph adopted, or False (recorded) when there is no re-planner or its budget is spent."""
         return self._replan(f"the recovery of {edge.id} does not hold ({reason})")
+
+    def _may_replan(self) -> bool:
+        """AgentChord's fallback (branch mode) has a re-plan left; the backtracking variants keep to backtracking."""
+        return (self.config.on_failure == "branch" and self.replan is not None
+                and self.metrics.replans < self.config.max_replans)
 
     def _replan(self, why: str) -> Any:
         if self.replan is None or self.metrics.replans >= self.config.max_replans:
