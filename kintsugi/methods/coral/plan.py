@@ -12,82 +12,13 @@ limit) is refused here with the reason, as is anything the instruction forbids a
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
 
 from kintsugi.methods.coral.language import Reader, Step
+from kintsugi.methods.coral.primitives import (AXES, DEFAULT_HOLD_S, DEFAULT_PRESS_S, DEFAULT_PUSH_M, MAX_PUSH_M,
+                                               MIN_OVERHANG_LENGTH_M, ROUND_SHAPES, CostPlan, Primitive, Segment,
+                                               _axis, _centre, _dirname, around, fits, tall)
 from kintsugi.methods.coral.nouns import NotUnderstood
 from kintsugi.methods.coral.types import FormulationRequest, ObjectState
-
-DEFAULT_PUSH_M = 0.10
-"""A push given a direction but no distance goes this far (the plan says so in its notes)."""
-DEFAULT_PRESS_S = 2.0
-DEFAULT_HOLD_S = 1.0
-MAX_PUSH_M = 0.40
-MIN_OVERHANG_LENGTH_M = 0.15
-"""An object pushed out over the table edge must be at least this long: it sticks out far enough to be pinched
-from below (beyond the fingers' width) and still rests mostly on the table."""
-AXES = {"forward": (0, 1.0), "back": (0, -1.0), "left": (1, 1.0), "right": (1, -1.0)}
-"""Robot-frame directions as (world axis, sign): the robot faces +x, its left is +y."""
-ROUND_SHAPES = ("cylinder", "sphere", "ball", "puck", "can", "capsule")
-FINGER_MARGIN_M = 0.015
-"""How much narrower than the open gripper a side must be to be pinched across."""
-
-
-@dataclass
-class Primitive:
-    name: str
-    obj: str | None = None
-    params: dict[str, object] = field(default_factory=dict)
-
-    def __str__(self) -> str:
-        args = " ".join(f"{k}={_fmt(v)}" for k, v in self.params.items())
-        return " ".join(x for x in (self.name, self.obj or "", args) if x)
-
-
-@dataclass
-class Segment:
-    """Primitives one cost builder writes together (`builder` names it in costlib)."""
-
-    builder: str
-    obj: str | None
-    prims: list[Primitive]
-    args: dict[str, object] = field(default_factory=dict)
-
-
-@dataclass
-class CostPlan:
-    steps: list[Step]
-    segments: list[Segment]
-    notes: list[str] = field(default_factory=list)
-
-    @property
-    def primitives(self) -> list[str]:
-        return [str(p) for s in self.segments for p in s.prims]
-
-
-def _fmt(v: object) -> str:
-    return f"{v:g}" if isinstance(v, float) else str(v)
-
-
-def fits(o: ObjectState, max_opening: float) -> bool:
-    return min(o.size_m[0], o.size_m[1]) < max_opening - FINGER_MARGIN_M
-
-
-def tall(o: ObjectState) -> bool:
-    return o.size_m[2] > max(o.size_m[0], o.size_m[1]) and o.upright_deg < 30
-
-
-def _centre(f) -> tuple[float, float]:  # noqa: ANN001 - a FixtureView
-    return (f.lo_m[0] + f.hi_m[0]) / 2, (f.lo_m[1] + f.hi_m[1]) / 2
-
-
-def _axis(dx: float, dy: float) -> tuple[int, float]:
-    axis = 0 if abs(dx) >= abs(dy) else 1
-    return axis, (1.0 if (dx if axis == 0 else dy) >= 0 else -1.0)
-
-
-def _dirname(axis: int, sign: float) -> str:
-    return {(0, 1.0): "+x", (0, -1.0): "-x", (1, 1.0): "+y", (1, -1.0): "-y"}[(axis, sign)]
 
 
 class Planner:
@@ -237,7 +168,7 @@ class Planner:
             step[axis] = sign * d
             goal = ("first", round(origin[1] + step[0], 4), round(origin[2] + step[1], 4))
             face = _dirname(axis, -sign)
-        legs = self._around(o, origin, goal)
+        legs = around(o, origin, goal, self.req, self.avoid, self.notes)
         for i, (a, b) in enumerate(legs):
             to = {"marker": lambda: {"to": b[1]}, "first": lambda: {"dir": _dirname(axis, sign), "m": round(d, 4)},
                   "point": lambda: {"via": f"{b[1]:.3f},{b[2]:.3f}"}}[b[0]]()
@@ -247,41 +178,6 @@ class Planner:
                                   *([Primitive("withdraw", None)] if b[0] != "point" else [])],
                      origin=a, goal=b, avoid=sorted(self.avoid), tol=0.02 if b[0] == "point" else None)
         self.where[o.name] = goal
-
-    def _point(self, o: ObjectState, p: tuple) -> tuple[float, float]:
-        if p[0] == "first":
-            return o.pos_m[0] + p[1], o.pos_m[1] + p[2]
-        if p[0] == "marker":
-            m = next(x for x in self.req.markers if x.name == p[1])
-            return m.x_m, m.y_m
-        return p[1], p[2]
-
-    def _around(self, o: ObjectState, origin: tuple, goal: tuple) -> list[tuple[tuple, tuple]]:
-        """The legs of a push from origin to goal: one, or two by a way point beside a fixture to avoid that
-        stands in the way (on the side away from the line's offset, far enough for the object and the fingers)."""
-        (ax, ay), (gx, gy) = self._point(o, origin), self._point(o, goal)
-        length = math.hypot(gx - ax, gy - ay)
-        if length < 1e-6 or not self.avoid:
-            return [(origin, goal)]
-        ux, uy = (gx - ax) / length, (gy - ay) / length
-        nx, ny = -uy, ux
-        radius = math.hypot(o.size_m[0], o.size_m[1]) / 2
-        for name in sorted(self.avoid):
-            f = self.fixtures[name]
-            (cx, cy), hx, hy = _centre(f), (f.hi_m[0] - f.lo_m[0]) / 2, (f.hi_m[1] - f.lo_m[1]) / 2
-            along = (cx - ax) * ux + (cy - ay) * uy
-            side = (cx - ax) * nx + (cy - ay) * ny
-            reach = abs(nx) * hx + abs(ny) * hy + radius + 0.01
-            if not 0.0 < along < length or abs(side) > reach:
-                continue
-            off = reach + 0.03
-            sgn = -1.0 if side > 0 else 1.0
-            if abs(side) < 1e-3:  # straight ahead: the side nearer the middle of the table
-                sgn = 1.0 if (cy + ny * off) ** 2 <= (cy - ny * off) ** 2 else -1.0
-            wp = ("point", round(cx + sgn * nx * off, 4), round(cy + sgn * ny * off, 4))
-            self.notes.append(f"{name} stands in the way: the push goes by {wp[1]:.3f}, {wp[2]:.3f}")
-            return [(origin, wp), (wp, goal)]
-        return [(origin, goal)]
 
     def press(self, s: Step) -> None:
         o = self.obj(s)

@@ -1,8 +1,6 @@
 """The embedded formulation backend: cost code composed from a library of cost terms.
 
-No lookup by task name. The instruction's words choose skills (pick / put down on / push
-against / press with N / flip over / pivot against / push over the table edge, then pick) and
-the objects' geometry fills them in:
+No lookup by task name. The instruction's words choose primitives and the objects' geometry fills them in:
 which object the words name, whether it stands tall or lies flat, which fixture or marker it
 goes to, which face to push on (the face turned away from the fixture), how high to grasp and
 which side fits the gripper. Every skill writes its stages as functions of the cost language
@@ -13,8 +11,12 @@ with a differently sized box. `knobs` are the weights and thresholds the code is
 the adaptation role refines them and the library writes the code again. Moves to a known pose also give
 their goal as `<cost>_seed_<axis>` functions: the plan restarts there (see kintsugi.methods.coral.stages).
 
-The library is split by skill: `scene` reads the instruction and the geometry, `templates` holds the knobs and the
-cost-code templates, and `grasp`, `push`, `turn` and `edge` write the skills' stages.
+The instruction is read in the controlled language (`kintsugi.methods.coral.language`, docs/coral-language.md)
+and planned as primitives (`kintsugi.methods.coral.plan`); here each segment of primitives is written by its
+builder: `templates` holds the knobs and the shared cost-code templates, `scene` the pushed face's region, and
+`grasp` (grasp, lift, carry, place), `push` (approach, push to a fixture, press), `slide` (push to a marker or a
+distance, round a fixture), `turn` (rotate about an edge or over a fixture) and `edge` (push over the table edge,
+grasp the overhang) write the stages.
 """
 
 from __future__ import annotations
