@@ -29,7 +29,7 @@ class RollCylinderConfig(ContactConfig):
 
 TASK = ContactTaskDef(
     name="roll-cylinder", description="roll a lying cylinder along the table onto a goal disc (system C)",
-    instruction="Push the wooden cylinder onto the blue disc.",
+    instruction="Roll the wooden cylinder onto the blue disc.",
     config_type=RollCylinderConfig, build=declared_setup, target="cylinder",
     scorer=lambda cfg, setup: GoalScorer("cylinder", "goal", cfg.scoring, setup),
 )
