@@ -1,4 +1,5 @@
-"""Cost code's share of an MPPI iteration on system C's tasks (the issue's budget: at most 10 %).
+"""Cost code's share of an MPPI iteration on system C's tasks (the budget: at most 10 %): T1-T6 and the tasks whose
+costs are composed from the same primitives (slide-puck, roll-cylinder, push-around).
 
 For each task: the embedded formulation's code (checked and probed as in a trial), one MPPI iteration in the
 planning world (K = control.samples rollouts), then every stage's cost evaluated on that rollout batch with
@@ -29,7 +30,7 @@ from kintsugi.core.registry import TASKS
 
 def measure(name: str, repeats: int) -> dict[str, float]:
     from kintsugi.control import MPPI
-    from kintsugi.methods.coral.env import entry_env, rollout_env, static_env
+    from kintsugi.methods.coral.env import entry_env, first_env, rollout_env, static_env
     from kintsugi.methods.coral.method import VARIANTS, Coral, probe_limits
     from kintsugi.methods.coral.stages import attractor_of
     from kintsugi.methods.coral.costlib import compose
@@ -64,7 +65,7 @@ def measure(name: str, repeats: int) -> dict[str, float]:
         mppi.step(data)
         it.append(time.process_time() - c)
     batch = got["batch"]
-    env0 = {**static_env(ctx.known, cfg), **entry_env(obs, ctx.known), "kept": np.asarray(0.0)}
+    env0 = {**static_env(ctx.known, cfg), **first_env(obs), **entry_env(obs, ctx.known), "kept": np.asarray(0.0)}
     shares = {"mppi_cpu_ms": round(1000 * statistics.median(it), 2)}
     for spec in plan.stages:
         att = attractor_of(plan, spec.region, cfg.control.attractor_samples, 0)
@@ -82,7 +83,8 @@ def measure(name: str, repeats: int) -> dict[str, float]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--tasks", default="pick-box,pick-clutter,push-force,flip-box,flip-wall")
+    ap.add_argument("--tasks", default="push-pick-board,pick-box,pick-clutter,push-force,flip-box,flip-wall,"
+                                      "slide-puck,roll-cylinder,push-around")
     ap.add_argument("--repeats", type=int, default=5)
     args = ap.parse_args()
     load_builtins()

@@ -49,8 +49,10 @@ def avoid_code(n: str, fixtures: list[str], o: ObjectState) -> str:
         for who, name, clear in ((f"{n}_pos", f"clear_{f}_{n}", r), ("tcp", f"clear_{f}_hand", 0.025)):
             out.append(f'''def {name}({who}, {f}_lo, {f}_hi):
     """How far inside {clear:.3f} m of {f} (its footprint's circle) the point is (0 when clear)."""
-    c = 0.5 * ({f}_lo + {f}_hi)
-    return relu({clear:.4f} + 0.5 * norm({f}_hi[:2] - {f}_lo[:2]) - norm({who}[..., :2] - c[:2]))''')
+    dx = {who}[..., 0] - 0.5 * ({f}_lo[0] + {f}_hi[0])
+    dy = {who}[..., 1] - 0.5 * ({f}_lo[1] + {f}_hi[1])
+    reach = {clear:.4f} + 0.5 * sqrt(({f}_hi[0] - {f}_lo[0]) ** 2 + ({f}_hi[1] - {f}_lo[1]) ** 2)
+    return relu(reach - sqrt(dx * dx + dy * dy))''')
     return "\n\n\n".join(out)
 
 
