@@ -84,13 +84,52 @@ def model_sdf(geo: Geometry):  # noqa: ANN201
     return sdf
 
 
-def _symmetries(geo: Geometry) -> list[float]:
-    """Turns (degrees) about the model's own z axis that map it onto itself."""
-    centred = all(abs(p.pos[0]) < 1e-9 and abs(p.pos[1]) < 1e-9 for p in geo.parts)
-    if not centred:
-        return [0.0]
-    square = all(math.isclose(p.half[0], p.half[1], rel_tol=0.02) for p in geo.parts)
-    return [0.0, 90.0, 180.0, 270.0] if square else [0.0, 180.0]
+def _turn(axis: int, deg: float) -> np.ndarray:
+    c, s = round(math.cos(math.radians(deg))), round(math.sin(math.radians(deg)))
+    i, j = [k for k in range(3) if k != axis]
+    r = np.eye(3)
+    r[i, i], r[i, j], r[j, i], r[j, j] = c, -s, s, c
+    return r
+
+
+def _symmetries(geo: Geometry) -> tuple[list[np.ndarray], int | None]:
+    """Turns of the model's own frame that map it onto itself (a box's half turns about its axes, a square
+    section's quarter turns), and the axis it is round about (a cylinder's, a sphere's z), if any."""
+    if not all(abs(p.pos[0]) < 1e-9 and abs(p.pos[1]) < 1e-9 and abs(p.pos[2]) < 1e-9 for p in geo.parts):
+        return [np.eye(3)], None
+    turns = [np.eye(3), _turn(0, 180), _turn(1, 180), _turn(2, 180)]
+    for axis in range(3):
+        i, j = [k for k in range(3) if k != axis]
+        if all(math.isclose(p.half[i], p.half[j], rel_tol=0.02) for p in geo.parts):
+            turns += [t @ _turn(axis, 90) for t in turns[:4]]
+    round_axes = {AXES[p.axis] if p.shape != "sphere" else 2 for p in geo.parts if p.shape in ("cylinder", "sphere")}
+    round_about = round_axes.pop() if len(round_axes) == 1 and len(geo.parts) == 1 else None
+    return turns, round_about
+
+
+def _tilt(r: np.ndarray) -> float:
+    return math.degrees(math.acos(max(-1.0, min(1.0, r[2, 2]))))
+
+
+def _unroll(r: np.ndarray, axis: int) -> np.ndarray:
+    """Turn a frame about its own `axis` (a round model's: the camera cannot see the turn) so that its z axis is
+    as near the world's up as it can be or, turning about z, so that its x axis is as near the world's x."""
+    i, j = [k for k in range(3) if k != axis]
+    if axis == 2:
+        local = r.T @ np.array([1.0, 0.0, 0.0])
+        angle = math.atan2(local[j], local[i])
+    else:  # z is the second of the two axes across this one
+        local = r.T @ np.array([0.0, 0.0, 1.0])
+        angle = math.atan2(-local[i], local[j])
+    return r @ _turn_free(axis, angle)
+
+
+def _turn_free(axis: int, angle: float) -> np.ndarray:
+    c, s = math.cos(angle), math.sin(angle)
+    i, j = [k for k in range(3) if k != axis]
+    m = np.eye(3)
+    m[i, i], m[i, j], m[j, i], m[j, j] = c, -s, s, c
+    return m
 
 
 def _yaw_abs(r: np.ndarray) -> float:
@@ -190,9 +229,11 @@ class PoseEstimator:
     def _canonical(self, name: str, frame: np.ndarray) -> np.ndarray:
         """Of the headings a symmetric model looks the same in (a box turned half a turn about its up axis, a
         square one a quarter turn), the one nearest the world's x axis: no camera can tell them apart."""
-        turns = _symmetries(self._geometry[name])
-        options = [frame @ _yaw_rot(a) for a in turns]
-        return min(options, key=_yaw_abs)
+        turns, round_about = _symmetries(self._geometry[name])
+        options = [frame @ t for t in turns]
+        if round_about is not None:
+            options = [_unroll(r, round_about) for r in options]
+        return min(options, key=lambda r: (round(_tilt(r)), _yaw_abs(r)))
 
     def _fit(self, name: str, pts: np.ndarray, t: float) -> Estimate | None:
         track = self.history[name] or [e for _, f in self._pending for k, e in f.items() if k == name][-1:]
@@ -214,5 +255,8 @@ class PoseEstimator:
         good = [f for f in fits if f[1] >= best_in - 0.02 and f[0] <= 1.05 * best_rms + 1e-4]
         rms, _, c, frame = min(good, key=lambda f: f[0]) if track else \
             min(((f[0], f[1], f[2], self._canonical(name, f[3])) for f in good), key=lambda f: _yaw_abs(f[3]))
+        round_about = _symmetries(self._geometry[name])[1]
+        if track and round_about is not None:  # a turn about a round model's axis never shows: none is reported
+            frame = _unroll(frame, round_about)
         return Estimate(t=t, pos=np.asarray(c, float), rot=np.asarray(frame, float), rms_m=float(rms),
                         points=len(pts))
