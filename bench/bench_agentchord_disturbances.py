@@ -7,7 +7,8 @@ condition on the seeds both AgentChord and the baseline solved.
     .venv/bin/python bench/bench_agentchord_disturbances.py --run [--tasks a,b] [--conditions drop,shift,knock,all]
         [--trials N] [--base-seed S] [--workers W] [--out runs/disturbances]
 
-`--run` runs (or resumes) `kintsugi bench <task> --methods agentchord --conditions <those the task has>` per task
+A campaign given later replaces an earlier one's record of the same trial (task/method/variant/condition/seed):
+chosen seeds re-run on a newer commit. `--run` runs (or resumes) `kintsugi bench <task> --methods agentchord --conditions <those the task has>` per task
 into <out>/<task>, then prints the tables. Fresh seeds (never used while developing) start at 40000.
 """
 
@@ -116,7 +117,8 @@ def main() -> None:
         dirs += run(a.tasks.split(","), a.conditions.split(","), a.trials, a.base_seed, a.workers, a.out)
     if not dirs:
         ap.error("give campaign directories, or --run")
-    records = [r for d in dirs for r in iter_records(d)]
+    latest = {r.key: r for d in dirs for r in iter_records(d)}  # a later campaign's record of a trial wins
+    records = list(latest.values())
     by_cell = cells(records)
     print("\n".join(disturbance_rows(by_cell)))
     paired = paired_rows(by_cell)
