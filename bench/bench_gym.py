@@ -118,7 +118,7 @@ def main() -> None:
             env.close()
     lines += ["", f"CPU time per control period, {args.steps} periods x {args.repeats} repeats in alternating chunks of "
               f"{args.chunk}, no images, the scorer every {m['score_s']:g} s of sim time (the default); load average {load:.1f} "
-              "when it ran (the machine's other programs inflate Python's share more than the physics')."]
+              "when it ran (other programs shared the 2 cores)."]
     if not args.no_page:
         write_block(Path(__file__).resolve().parents[1] / "docs" / "datasets.md", Block("bench_gym", command_line(), lines))
 
