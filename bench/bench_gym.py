@@ -117,8 +117,8 @@ def main() -> None:
             profile(env, args.steps)
             env.close()
     lines += ["", f"CPU time per control period, {args.steps} periods x {args.repeats} repeats in alternating chunks of "
-              f"{args.chunk}, no images, the scorer every {m['score_s']:g} s of sim time (the default); load average {load:.1f} "
-              "when it ran (other programs shared the 2 cores)."]
+              f"{args.chunk}, no images, the scorer every {m['score_s']:g} s of sim time (the default); load average "
+              f"{load:.1f} when it ran (other programs shared the {os.cpu_count()} cores)."]
     if not args.no_page:
         write_block(Path(__file__).resolve().parents[1] / "docs" / "datasets.md", Block("bench_gym", command_line(), lines))
 
