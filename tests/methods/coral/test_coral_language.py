@@ -118,3 +118,11 @@ def test_without_a_contact_strategy_the_grasp_has_no_side_or_height_chosen() -> 
     assert "start_cube0_pos" in with_strategy.source and "start_cube0_pos" not in blind.source
     assert "def box_aim(start_yaw):" in blind.source and "finger_length / 3.0" not in blind.source
     assert [s.name for s in blind.stages] == [s.name for s in with_strategy.stages]
+
+
+def test_without_a_contact_strategy_the_overhang_is_not_pinched_from_below() -> None:
+    text = "Push the cutting board until its handle sticks out over the table edge, then pick the board up by the handle."
+    coral = compose(scene_request("board", text))
+    blind = compose(scene_request("board", text, contact=False))
+    assert "under_cost" in coral.source and "under_cost" not in blind.source
+    assert [s.name for s in blind.stages] == ["approach", "push", "back-off", "reach", "descend", "grasp", "lift", "hold"]

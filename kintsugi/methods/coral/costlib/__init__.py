@@ -68,7 +68,11 @@ def compose(req: FormulationRequest, knobs: dict[str, float] | None = None) -> F
         elif seg.builder == "push_over_edge":
             push_over_edge(plan, o, k, contact)
         elif seg.builder == "pick_overhang":
-            pick_past_edge(plan, o, k)
+            if contact:
+                pick_past_edge(plan, o, k)
+            else:  # no contact strategy: no pinch under the overhang either; the planner finds the grasp
+                pick(plan, o, others, k, contact=False)
+                settle(plan, "hold", 0.5, "closed", k)
         elif seg.builder == "tip":
             tip(plan, o, a["axis"], a["sign"], k, contact)
         elif seg.builder == "pivot":
