@@ -270,14 +270,17 @@ def _probe_images(reasoner: Any) -> str | None:
     text = "Say OK."
     try:
         plain = _ask(reasoner, [{"role": "user", "content": text}], {})
+    except EndpointError as exc:
+        raise CapabilityError(f"preflight: {exc}") from None
+    try:
         with_image = _ask(reasoner, [{"role": "user", "content": [
             {"type": "text", "text": text},
             {"type": "image_url", "image_url": {"url": "data:image/png;base64," + base64.b64encode(PROBE_PNG).decode()}},
         ]}], {})
     except ImagesRefused as exc:
         return str(exc).split(";")[0].split(": ", 1)[-1]
-    except EndpointError as exc:
-        raise CapabilityError(f"preflight: {exc}") from None
+    except EndpointError as exc:  # e.g. llama-cpp-python's formatter failing on list-form content (HTTP 500)
+        return f"a request with an image failed where the same text alone did not ({str(exc).split(': ', 1)[-1]})"
     a, b = _prompt_tokens(plain), _prompt_tokens(with_image)
     if a and b is not None and b <= a:
         return (f"it counted {b} prompt tokens with an image against {a} without: the image (and list-form "

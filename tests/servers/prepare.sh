@@ -20,4 +20,4 @@ fi
 start=$(date +%s)
 "$HERE/build_llama_server.sh" "$PY" >/dev/null
 "$HERE/build_tools.sh" "$PY" >/dev/null
-echo "servers: llama-server $VERSION (and llama-cpp-python when KINTSUGI_LLAMA_CPP_PYTHON=1) ready in $CACHE ($(( $(date +%s) - start )) s)" >&2
+echo "servers: llama-server and llama-cpp-python $VERSION (one llama.cpp build) ready in $CACHE ($(( $(date +%s) - start )) s)" >&2

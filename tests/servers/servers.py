@@ -1,6 +1,6 @@
 """Real OpenAI-compatible servers for tests: llama.cpp's `llama-server` and llama-cpp-python's server, both
-built once per machine from the pinned llama-cpp-python source package (`build_llama_server.sh`,
-`build_tools.sh`, run by `make servers`), serving a tiny generated GGUF model on 127.0.0.1. Each server
+built once per machine from the pinned llama-cpp-python source package (`build_llama_server.sh` compiles
+llama.cpp once, as shared libraries; `build_tools.sh` installs llama-cpp-python on them; `make servers`), serving a tiny generated GGUF model on 127.0.0.1. Each server
 is started on a free port and stopped by its process id."""
 
 from __future__ import annotations
@@ -21,7 +21,8 @@ VERSION = os.environ.get("LLAMA_CPP_PYTHON_VERSION", "0.3.36")
 CACHE = Path(os.environ.get("KINTSUGI_CACHE", Path.home() / ".cache" / "kintsugi")) / f"llama-cpp-python-{VERSION}"
 LLAMA_SERVER = CACHE / "bin" / "llama-server"
 TOOLS_PYTHON = CACHE / "venv" / "bin" / "python"
-TOOLS_OK = CACHE / "venv" / ".kintsugi-tools-ok"
+TOOLS_OK = CACHE / "venv" / ".kintsugi-llama-cpp-python-ok"
+"""Written by build_tools.sh once llama-cpp-python is installed on llama-server's shared libraries."""
 GGUF_OK = CACHE / "venv" / ".kintsugi-gguf-ok"
 UNAVAILABLE = CACHE / "unavailable.txt"
 """Written by `make servers` when this machine cannot build the servers (no compiler, no cmake): the reason."""
@@ -33,7 +34,7 @@ def missing(what: str) -> str | None:
     """Why `what` ('gguf', 'llama-server' or 'llama-cpp-python') cannot be used here, or None when it can."""
     if UNAVAILABLE.exists():
         return f"the real-server build is impossible on this machine: {UNAVAILABLE.read_text().strip()}"
-    if what == "llama-server" and not LLAMA_SERVER.exists():
+    if what == "llama-server" and not (LLAMA_SERVER.exists() and (LLAMA_SERVER.parent / "libllama.so").exists()):
         return f"{LLAMA_SERVER} is not built; run `make servers` (tests/servers/build_llama_server.sh)"
     if not GGUF_OK.exists():
         return f"the servers' tool venv {CACHE / 'venv'} has no gguf; run `make servers` (tests/servers/build_tools.sh)"
