@@ -75,7 +75,8 @@ def context_numbers(exc: openai.APIStatusError) -> tuple[int | None, int | None]
     m = re.search(r"maximum context length is (\d+)", text)
     if m and n_ctx is None:
         n_ctx = int(m.group(1))
-    m = re.search(r"(?:requested|resulted in|prompt (?:has|is)) (\d+) tokens", text)
+    m = re.search(r"\((\d+) in (?:the messages|your prompt)", text) or \
+        re.search(r"(?:requested|resulted in|prompt (?:has|is)) (\d+) tokens", text)
     if m and n_prompt is None:
         n_prompt = int(m.group(1))
     return n_ctx, n_prompt

@@ -65,7 +65,7 @@ def test_openai_style_context_errors_are_read_too(fake_openai: FakeOpenAIServer)
                                              "requested 9000 tokens (8000 in the messages, 1000 in the completion)."))
     with pytest.raises(ContextTooLong) as info:
         ask(make(fake_openai), "judge", judge_request())
-    assert (info.value.n_ctx, info.value.n_prompt) == (8192, 9000)
+    assert (info.value.n_ctx, info.value.n_prompt) == (8192, 8000)  # the prompt's tokens, not the reply's
 
 
 def test_transient_errors_are_retried_with_the_count_in_the_message(fake_openai: FakeOpenAIServer) -> None:
