@@ -17,7 +17,7 @@ DEFAULT_KNOBS: dict[str, float] = {
     "w_press_contact": 300.0, "w_tip": 5.0,
     "clear_m": 0.025, "lift_m": 0.12, "carry_z_m": 0.14, "set_down_m": 0.004, "touch_n": 2.0,
     "push_z_m": 0.008, "push_height": 0.7, "paddle_m": 0.01, "push_speed_m_s": 0.08,
-    "tip_deg": 45.0, "pivot_deg": 125.0, "reach_over_m": 0.06, "fling_m_s": 0.3, "rest_m": 0.005, "flip_deg": 75.0, "reach_tol_m": 0.012, "force_tol_n": 0.5,
+    "tip_deg": 45.0, "pivot_deg": 125.0, "reach_over_m": 0.06, "fling_m_s": 0.3, "rest_m": 0.005, "flip_deg": 75.0, "reach_tol_m": 0.012, "force_tol_n": 0.6,
     "timeout_scale": 1.0, "hold_press_s": 2.0,
     "overhang_m": 0.09, "pinch_past_edge_m": 0.035, "under_edge_z_m": -0.012, "travel_z_m": 0.07,
     "edge_lift_z_m": 0.28, "edge_touch_n": 5.0, "still_m_s": 0.03, "kept_m": 0.02, "clear_lift_m": 0.06,
