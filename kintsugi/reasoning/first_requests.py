@@ -67,12 +67,11 @@ class _Capturing:
     """What a method gets for a reasoner during the dry run: captures, then answers offline."""
 
     def __init__(self, real: Any, capture: _Capture) -> None:
-        from kintsugi.core.record import ReasonerSettings
-        from kintsugi.reasoning import make_reasoner
+        from kintsugi.reasoning.embedded import EmbeddedReasoner
 
         self.real, self.capture = real, capture
         self.name = real.name
-        self.answerer = make_reasoner(ReasonerSettings())
+        self.answerer = EmbeddedReasoner()
         self.last_stats = None
 
     @property
