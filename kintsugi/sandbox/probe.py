@@ -2,7 +2,8 @@
 
 The child (from a forkserver, so it inherits no threads or simulator state) compiles the
 source, calls every requested function on sample inputs of the loop's real shapes, and
-reports per-call time, output shape and how many values are not finite. It runs under a
+reports per-call CPU time (the least of a few calls: a loaded machine's waits are not the code's
+cost, and CPU time does not count them), output shape and how many values are not finite. It runs under a
 CPU-time limit and an address-space limit (RLIMIT_CPU, RLIMIT_AS), and the parent kills it
 after a wall-clock timeout. Whatever happens in the child, the parent gets a `ProbeReport`
 or one SandboxError saying what went wrong; nothing the code does reaches the parent.
@@ -32,14 +33,14 @@ class ProbeLimits:
     memory_mb: int = 512
     """Address space the child may add beyond what it starts with."""
     max_call_s: float = 0.05
-    """A cost slower than this per call is refused: the control loop calls it every iteration."""
+    """A cost using more CPU time than this per call is refused: the control loop calls it every iteration."""
     repeats: int = 3
 
 
 @dataclass(frozen=True)
 class ProbeReport:
     seconds_per_call: dict[str, float]
-    """Median seconds per call of each probed function, measured in the child."""
+    """CPU seconds per call of each probed function (the least of `repeats` calls), measured in the child."""
 
 
 def _vm_bytes() -> int:
@@ -60,14 +61,14 @@ def _child(conn: Any, source: str, variables: frozenset[str], calls: dict[str, t
         for name, shape in calls.items():
             samples = []
             for _ in range(limits.repeats):
-                t0 = time.perf_counter()
+                t0 = time.thread_time()
                 out = program.call(name, env, shape)
-                samples.append(time.perf_counter() - t0)
+                samples.append(time.thread_time() - t0)
             bad = int(np.count_nonzero(~np.isfinite(out)))
             if bad:
                 raise SandboxError("non-finite", f"{name}() returns NaN or inf for {bad} of {out.size} values on the "
                                                  f"probe inputs (e.g. sqrt or log of a negative, division by zero)")
-            timings[name] = float(np.median(samples))
+            timings[name] = float(min(samples))
         conn.send(("ok", timings))
     except SandboxError as exc:
         conn.send((exc.kind, str(exc)))
@@ -122,6 +123,6 @@ def probe(source: str, variables: set[str] | frozenset[str], calls: Mapping[str,
     slow = {n: t for n, t in payload.items() if t > limits.max_call_s}
     if slow:
         name, t = max(slow.items(), key=lambda kv: kv[1])
-        raise SandboxError("slow", f"{name}() takes {t * 1000:.1f} ms per call on the probe inputs, more than the "
+        raise SandboxError("slow", f"{name}() takes {t * 1000:.1f} ms of CPU per call on the probe inputs, more than the "
                                    f"{limits.max_call_s * 1000:g} ms the control loop allows")
     return ProbeReport(seconds_per_call=payload)
