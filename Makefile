@@ -1,8 +1,9 @@
 # Two commands for a fresh machine (Python 3.11 + the package registries):
 #   make demo   set up, then tour the three systems offline (A peg insertion, B AgentChord against rekep
 #               under drops, C CoRAL against L2R), print each system's tables and write runs/demo/index.html
-#   make test   set up, build llama.cpp's llama-server once per machine (mk/servers.mk), then run the test suite
-#   make test-servers   also build llama-cpp-python's server and run the real-server suite against both
+#   make test   set up, build llama.cpp's llama-server and llama-cpp-python's server once per machine
+#               (mk/servers.mk), then run the test suite, the real-server suite included
+#   make test-servers   build both real servers and run only the real-server suite
 PY ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
