@@ -11,7 +11,7 @@ from typer.testing import CliRunner
 
 from kintsugi.core.record import ReasonerSettings, TrialSpec
 from kintsugi.core.runner import run_trial
-from kintsugi.reasoning.preflight import preflight
+from kintsugi.reasoning.preflight import CapabilityError, preflight
 from tests.servers.servers import Server
 
 SYSTEMS = [("peg-insertion", "recovery", "square", "none"), ("pour-single", "agentchord", "default", "none"),
@@ -29,8 +29,12 @@ def spec(server: Server, task: str, method: str, variant: str, condition: str, *
 def test_one_trial_per_system_with_measurements_instead_of_images(llama_server: Server, task: str, method: str,
                                                                   variant: str, condition: str) -> None:
     s = spec(llama_server, task, method, variant, condition, images="measurements")
-    preflight([s])  # passes: no image is sent, the context is large enough
-    rec = run_trial(s)
+    try:
+        preflight([s])  # no image is sent; the context may still be too short for the largest first request
+    except CapabilityError as exc:  # AgentChord's arranger asks more than the tiny model's context holds
+        message = str(exc)
+        assert "\n" not in message.strip() and "context" in message and "the request data is the largest" in message
+    rec = run_trial(s)  # the trial runs anyway: each call ends in a checked reply or a recorded error
     assert rec.reasoning_calls >= 1 and rec.reasoning_calls == len(rec.transcript)
     assert rec.reasoning_errors == sum(1 for c in rec.transcript if c["error"])
     for call in rec.transcript:
