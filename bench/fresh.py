@@ -17,7 +17,8 @@ disturbances per trial (the event logs' drops and pushes: how hard the seeds wer
 With `--dev-table` the development figures are read from the first Markdown table under the heading
 line that contains HEADING TEXT: its `method`, `task`, `shape`/`variant` and `condition` columns name
 the cell (a missing column matches every value), and the first column whose header contains `G %` or
-`success %` gives `rate [low–high]`.
+`success %` gives `rate [low–high]`; a table with a `task` column and one column per method instead (cells
+`k/n [low–high]`, System C's) gives one cell per task and method.
 """
 
 from __future__ import annotations
@@ -106,8 +107,11 @@ def page_cells(page: str, heading: str) -> dict[tuple, Figure]:
                                ("condition", ("condition",)))}
     rate_col = next((i for i, h in enumerate(header) if "g %" in h or "success %" in h), None)
     steps_col = next((i for i, h in enumerate(header) if h == "steps"), None)
+    if col["method"] is None and rate_col is None and col["task"] is not None:
+        return _wide_cells(rows, header, col["task"])
     if col["method"] is None or rate_col is None:
-        raise SystemExit(f"{page}: the table under {heading!r} needs a method column and a `G %` or `success %` one")
+        raise SystemExit(f"{page}: the table under {heading!r} needs a method column and a `G %` or `success %` one, "
+                         "or a task column and one column per method")
     out = {}
     for row in rows[2:]:
         m = _RATE.search(row[rate_col]) if rate_col < len(row) else None
@@ -116,6 +120,26 @@ def page_cells(page: str, heading: str) -> dict[tuple, Figure]:
         key = tuple(row[col[k]] if col[k] is not None else None for k in KEYS)
         steps = float(row[steps_col]) if steps_col is not None and re.fullmatch(r"[\d.]+", row[steps_col]) else None
         out[key] = Figure(float(m[1]), float(m[2]), float(m[3]), steps=steps)
+    return out
+
+
+_FRACTION = re.compile(r"(\d+)/(\d+)")
+
+
+def _wide_cells(rows: list[list[str]], header: list[str], task_col: int) -> dict[tuple, Figure]:
+    """A table with one row per task and one column per method (System C's), its cells `k/n [low–high]` or
+    `k/n`: the method is the column's header, the task the row's first word (`flip-box (T5)` is flip-box)."""
+    out = {}
+    for row in rows[2:]:
+        task = row[task_col].split(" (")[0].strip()
+        for i, cell in enumerate(row):
+            m = _FRACTION.match(cell)
+            if i == task_col or not m or int(m[2]) == 0:
+                continue
+            k, n = int(m[1]), int(m[2])
+            low, high = wilson_interval(k, n)
+            method = re.split(r" [(\[]", header[i])[0].strip()  # `expert-fsm [95 % CI]` is expert-fsm
+            out[(task, method, None, None)] = Figure(100 * k / n, 100 * low, 100 * high, n, k)
     return out
 
 

@@ -110,3 +110,16 @@ def test_fresh_seeds_say_what_moved_against_campaigns_and_against_a_page_table(t
     assert "No success rate moved." in text and "0 outside" in text and text.count("<!-- begin: f -->") == 1
     with pytest.raises(SystemExit):
         fresh_main([str(fresh)])  # the development figures are required
+
+
+def test_fresh_seeds_read_a_table_with_one_column_per_method(tmp_path: Path) -> None:
+    """System C's pages give one row per task and one column per method (`k/n [low–high]` or `k/n`)."""
+    from bench.fresh import page_cells
+
+    table = tmp_path / "c.md"
+    table.write_text("**CoRAL and its ablations.**\n\n| task | coral | l2r | expert-fsm [95 % CI] | paper /10 |\n"
+                     "|---|---|---|---|---|\n| flip-box (T5) | 10/10 [72–100], 1.0 attempts | 4/10 | 9/10 [60–98] | 9 |\n")
+    cells = page_cells(str(table), "CoRAL and its ablations")
+    assert {k[:2]: (f.k, f.n) for k, f in cells.items()} == {
+        ("flip-box", "coral"): (10, 10), ("flip-box", "l2r"): (4, 10), ("flip-box", "expert-fsm"): (9, 10)}
+    assert round(cells[("flip-box", "l2r", None, None)].low) == 17
