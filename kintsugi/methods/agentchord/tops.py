@@ -21,6 +21,9 @@ from kintsugi.taskgraph.geometry import head_yaw_deg
 UP = np.array([0.0, 0.0, 1.0])
 CAP_ALONG_M = 0.02
 """A seen cap this far along the axis from the centre signs it (nearer, the cap's pixels tell no end)."""
+STALE_DEG = 30.0
+"""A perceived axis this far or farther from the tracked top (either sign) means the object turned while no hand
+held it and no settle watched it (knocked over): its top is read again before a hand takes it."""
 
 
 def hand_rotation(arm_state: Any) -> np.ndarray:
@@ -59,6 +62,23 @@ class Tops:
                     self.world[name] = UP.copy()
                 continue
             self.world[name] = a if float(a @ ref) >= 0.0 else -a
+
+    def refresh(self, objects: Mapping[str, Any]) -> None:
+        """Before a hand takes an object: read the top again (`observe`) of each object whose perceived axis no
+        longer agrees with its tracked top. A bottle knocked over while both hands were busy elsewhere keeps the
+        top it was first seen with (up); a top-down grasp of it then records its top along the approach axis, and
+        the stand-up turns it no nearer upright. Objects whose axis still agrees keep their estimate."""
+        stale = {}
+        for name, f in objects.items():
+            ref = self.world.get(name)
+            if ref is None or not getattr(f, "visible", False) or f.axis is None:
+                continue
+            a = np.asarray(f.axis, dtype=float)
+            cos = abs(float(a @ ref)) / max(float(np.linalg.norm(a) * np.linalg.norm(ref)), 1e-12)
+            if cos < np.cos(np.radians(STALE_DEG)):
+                stale[name] = f
+        if stale:
+            self.observe(stale)
 
     def follow(self, arms: Mapping[str, Any]) -> None:
         """After an action: objects a hand holds turn with it; one that left a hand keeps the hand's last turn."""
