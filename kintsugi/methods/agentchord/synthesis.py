@@ -75,8 +75,31 @@ class EdgeSynthesis:
                 call = self._clear_grasp_call(call)
         if name == "place":
             target = self.graph.node(edge.target)
-            call = region_call(target, self.robot, relation_call(target, self.robot, self.seen, self._place_call(call)))
+            placed = self._stand_place_call(edge, call) or self._place_call(call)
+            call = region_call(target, self.robot, relation_call(target, self.robot, self.seen, placed))
         return call
+
+    def _stand_place_call(self, edge: Edge, call: dict) -> dict | None:
+        """Edge synthesis (Eq. 10) of the place that ends a stand-up (the edge turns its held object upright): the
+        spot where the object was first seen, when that spot is clear of every other object by PLACE_CLEAR_M and
+        the arm can carry it there (planned before anything moves); None (the place as given) otherwise. A knocked
+        object rolls anywhere: stood up where it lay, it stood beside the robot's body, where the joint-space
+        carry that followed swept it through the other arm, or in the way of the other arm's grasp. The spot it
+        was first seen at is the one the plan's reach and carries were made for."""
+        turns_up = any(a.name == "rotate_eef" and a.args.get("axis") == "closing" for a in edge.actions)
+        if not turns_up or not self._wants_upright(edge):
+            return None
+        touching = self.robot.arm_state(call["arm"]).touching
+        for obj in sorted(k for k, n in touching.items() if n == 2):
+            first = self.seen.get(obj)
+            if first is None or not self._clear(obj, first):
+                continue
+            moved = {**call, "x": round(first[0], 4), "y": round(first[1], 4)}
+            plan = getattr(self.robot, "execute", None)
+            if plan is not None and not plan(moved, plan_only=True).planned:
+                continue
+            return moved
+        return None
 
     def _place_call(self, call: dict) -> dict:
         """A place back where the held object was first seen, after the object was taken up again elsewhere (a

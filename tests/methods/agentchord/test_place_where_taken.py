@@ -113,3 +113,32 @@ def test_pour_single_seed_67_sets_the_bottle_down_where_it_took_it_up_again() ->
 @pytest.mark.slow
 def test_pour_single_seed_70_keeps_the_bottle_away_from_the_cup() -> None:
     _trial(70)
+
+
+def _stand_up(robot: _Robot) -> EdgeSynthesis:
+    """A stand-up edge (grasp lying, lift, turn about the closing axis, place) whose place was filled from where
+    the bottle lay when the graph was planned (a re-plan after it rolled)."""
+    actions = [{"name": "grasp", "args": {"arm": "right", "obj": "bottle"}},
+               {"name": "move_by_offset", "args": {"arm": "right", "dxyz": [0.0, 0.0, 0.15]}},
+               {"name": "rotate_eef", "args": {"arm": "right", "angle_deg": 90.0, "axis": "closing"}},
+               {"name": "place", "args": {"arm": "right", "x": 0.11, "y": 0.03}}]
+    g = TaskGraph.model_validate({
+        "task": "t", "start": "a", "goal": "b",
+        "nodes": [{"id": "a"}, {"id": "b", "constraints": [{"kind": "upright", "object": "bottle", "tol_deg": 15}]}],
+        "edges": [{"id": "e", "source": "a", "target": "b", "actions": actions}]})
+    return EdgeSynthesis(g, robot, keyframes=None, tops=Tops(), heads=Heads(), seen={"bottle": FIRST})
+
+
+def test_a_stand_up_sets_the_object_down_where_it_was_first_seen_when_that_spot_is_clear() -> None:
+    robot = _Robot(bottle=(0.11, 0.03))  # rolled up to the robot's body, where it was taken up again
+    s = _stand_up(robot)
+    s.grasp_outcome({"arm": "right", "obj": "bottle"})
+    assert _place(s, 0.11, 0.03) == FIRST
+    assert _place(s) == FIRST  # compiled to the first spot: kept there, not moved to where it was taken up
+
+
+def test_a_stand_up_keeps_its_place_when_the_first_spot_is_taken() -> None:
+    robot = _Robot(bottle=(0.11, 0.03), cup=(FIRST[0] + 0.05, FIRST[1]))  # the cup stands there now
+    s = _stand_up(robot)
+    s.grasp_outcome({"arm": "right", "obj": "bottle"})
+    assert _place(s, 0.11, 0.03) == (0.11, 0.03)
