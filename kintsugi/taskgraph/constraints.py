@@ -238,7 +238,7 @@ class InRegion(_Template):
 
 class Offset(_Template):
     """`a` relative to `b` inside the box [lo, hi] (world axes, metres): the largest per-axis excursion outside it
-    (negative inside). Relations between objects: `left_of` (a's centre 8-22 cm to b's +y side), a stacked
+    (negative inside). Relations between objects: `left_of` (a's centre 6.5-27.5 cm to b's +y side), a stacked
     object's bottom at its support's top (z within a few millimetres)."""
 
     kind: Literal["offset"] = "offset"

@@ -62,14 +62,24 @@ ON_MARGIN_M = 0.005
 """`on(x, y)`: x's centre this far inside y's perceived footprint..."""
 ON_GAP_M = (-0.01, 0.012)
 """...and x's bottom this far below / above y's top (perception reads both to a few millimetres)."""
-SIDE_M = (0.08, 0.22)
-"""`left_of` / `right_of`: x's centre this far to the side (world y) of y's centre..."""
-SIDE_ALONG_M = 0.06
+RELATION_MARGIN_M = 0.005
+"""Perception's error on one object's centre relative to another's, as the relation checks below read it:
+at most 1.8 mm over 48 can-to-box offsets (flank-box under `pose`, standing cans at rest, the box turned up
+to 15 degrees), rounded up."""
+SIDE_M = (0.06 + RELATION_MARGIN_M, 0.28 - RELATION_MARGIN_M)
+"""`left_of` / `right_of`: x's centre this far to the side (world y) of y's centre...
+
+The tabletop scorers' bounds (6-28 cm to the side, within 8 cm front to back) shrunk by RELATION_MARGIN_M: a
+relation the method reads as holding then holds on the true poses too (the verdict is never looser than the
+scorer), while an object the scorer accepts is refused only within perception's error of a bound (any narrower
+band fails trials the scorer counts as successes)."""
+SIDE_ALONG_M = 0.08 - RELATION_MARGIN_M
 """...and within this of it front to back (world x)."""
 SIDE_AIM_M = 0.15
-"""Where a place beside an object aims: this far to its side (the middle of SIDE_M)."""
-BESIDE_M_RANGE = (0.08, 0.25)
-"""`beside(x, y)`: the centres this far apart horizontally, either side."""
+"""Where a place beside an object aims: this far to its side (well inside SIDE_M)."""
+BESIDE_M_RANGE = (0.06 + RELATION_MARGIN_M, 0.28 - RELATION_MARGIN_M)
+"""`beside(x, y)`: the centres this far apart horizontally, either side: the scorers' `beside` bounds shrunk
+by RELATION_MARGIN_M, as for SIDE_M (a place to one side also makes `beside`, which the goal check reads too)."""
 ARM_BASES = {"left": (-0.05, 0.30), "right": (-0.05, -0.30)}
 """The robot's description: where each arm's base stands (the default robot: bases 0.6 m apart at x = -0.05)."""
 REACH_M = 0.72
