@@ -1,7 +1,8 @@
 """Which end of each object is its top, kept by the conductor from what the robot senses.
 
 Perception gives an object's principal axis without a sign. A bottle's painted cap, when the cameras see it
-(perception's extreme `cap`), says which end is its top outright. When a hand hides it, the robot can still
+(perception's extreme `cap`), says which end is its top outright, as a container's fitted open end does
+(extreme `opening`, which the `upright` check reads as a container's top too). When a hand hides it, the robot can still
 know: an object first seen standing has its top up; while a hand holds it, its top turns with the hand (joint encoders);
 when it leaves the hand, its top is where the hand last had it; and while it falls and rolls, each perceived
 axis is signed to agree with the previous estimate (the settle reads come every ~0.1 s, well under the time
@@ -43,14 +44,15 @@ class Tops:
         self.in_hand: dict[tuple[str, str], np.ndarray] = {}
 
     def observe(self, objects: Mapping[str, Any]) -> None:
-        """Sign each perceived axis toward the seen cap, else like the current estimate; an object first seen
-        standing has its top up."""
+        """Sign each perceived axis toward the seen cap (a container's opening), else like the current estimate;
+        an object first seen standing has its top up."""
         for name, f in objects.items():
             if not getattr(f, "visible", False) or f.axis is None or f.upright is None:
                 continue
             a = np.asarray(f.axis, dtype=float)
             a = a / max(float(np.linalg.norm(a)), 1e-12)
-            cap = (getattr(f, "extremes", None) or {}).get("cap")
+            ex = getattr(f, "extremes", None) or {}
+            cap = ex.get("cap", ex.get("opening"))
             if cap is not None and f.centroid is not None:
                 along = float((np.asarray(cap, dtype=float) - np.asarray(f.centroid, dtype=float)) @ a)
                 if abs(along) >= CAP_ALONG_M:

@@ -1,7 +1,8 @@
 """A top tracked for an object that turned while no hand held it and no settle watched it (knocked over while
 both hands were busy) is read again before a hand takes it (`Tops.refresh`). Taken with the stale top (up), a
 top-down grasp recorded it along the approach axis, and the stand-up turned the bottle no nearer upright
-(pour-dual development seed 41017 under `all`)."""
+(pour-dual development seed 41017 under `all`). A container's fitted opening signs its top as a bottle's cap
+does: a cup that tipped out of the hand and fell was stood up on its rim (seed 41008 under `all`)."""
 
 from __future__ import annotations
 
@@ -47,3 +48,11 @@ def test_without_a_cap_the_lying_axis_is_signed_like_the_stale_top() -> None:
     tops.refresh({"bottle": _Seen(axis=(-0.99, 0.0, -0.1))})
     top = tops.world["bottle"]
     assert abs(top[2]) < 0.2 and top[2] >= 0.0  # lying now; the end that was higher
+
+
+def test_a_containers_fitted_opening_signs_its_top_as_a_cap_does() -> None:
+    tops = Tops()
+    tops.world["cup"] = np.array([1.0, 0.0, 0.0])  # the top the hand last had: carried over wrongly by a slip
+    opening = (0.3 - 0.045, -0.1, 0.03)  # the open end at -x: it fell over that way
+    tops.observe({"cup": _Seen(axis=(1.0, 0.0, 0.0), extremes={"opening": opening})})
+    assert np.allclose(tops.world["cup"], [-1.0, 0.0, 0.0])
