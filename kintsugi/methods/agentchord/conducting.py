@@ -26,8 +26,10 @@ class ConductorConfig(StrictModel):
     max_recoveries: int = 10
     """Recoveries (or backtracks) per episode before the conductor gives up."""
     max_replans: int = 2
-    """Re-plans from the current observation when a recovery keeps failing its merge check (the paper's
-    fallback; each costs the planning calls again), before the trial ends as a failure."""
+    """Re-plans from the current observation per trial (the paper's fallback; each costs the planning calls
+    again), whatever asked for them: a recovery that keeps failing its merge check or keeps being disturbed, an
+    action no arm reaches, a goal check that fails at the end of the graph. With none left the trial ends as a
+    recorded failure ("gave up ... no re-plan left")."""
     on_failure: Literal["branch", "backtrack"] = "branch"
     """branch: the pre-compiled forward recovery (AgentChord); backtrack: back to the latest nominal node whose
     sub-goal still holds and re-run the nominal edges from there (AC-BT, ReKep-style)."""
@@ -44,7 +46,8 @@ class Metrics:
     firings: list[str] = field(default_factory=list)
     keyframe_solves: int = 0
     replans: int = 0
-    """Fallback re-plans (a recovery that kept failing its merge check)."""
+    """Fallback re-plans so far (any reason; `ConductorConfig.max_replans` bounds them), recorded in the run's
+    figures."""
     fired_at: int | None = None
     """Control step of the latest firing whose recovery has not issued its first command yet."""
 

@@ -56,6 +56,9 @@ class RunFigures(Figures):
     recovery_latency_steps: list[int]
     """Per recovery: control steps from the monitor's firing to the recovery's first command."""
     recoveries: int
+    replans: int = 0
+    """Re-plans from the current observation at run time (AgentChord's fallback, at most `max_replans`; a
+    re-planning baseline's every re-plan), each recorded as a `replan` event with its reason."""
     actions: int
     graph_nodes: int
     graph_edges: int
@@ -118,7 +121,7 @@ class AgentChord:
                     modelled_execution_time_s=round(robot.sim_time + len(reasoner.records) * latency, 4),
                     latency_model_s=latency, planning_reasoning_calls=planning_calls,
                     runtime_reasoning_calls=runtime_calls, recovery_latency_steps=m.recovery_latency_steps,
-                    recoveries=m.recoveries, actions=m.actions,
+                    recoveries=m.recoveries, replans=m.replans, actions=m.actions,
                     graph_nodes=len(g.nodes), graph_edges=len(g.edges), monitors=len(g.monitors()))
                 log.figures(metrics)
             return ok

@@ -112,7 +112,8 @@ class Replanning:
                 modelled_execution_time_s=round(robot.sim_time + len(self.reasoner.records) * latency, 4),
                 latency_model_s=latency, planning_reasoning_calls=planning_calls,
                 runtime_reasoning_calls=runtime, recovery_latency_steps=metrics.recovery_latency_steps,
-                recoveries=metrics.recoveries, actions=metrics.actions, graph_nodes=0, graph_edges=0, monitors=0)
+                recoveries=metrics.recoveries, replans=metrics.recoveries, actions=metrics.actions, graph_nodes=0,
+                graph_edges=0, monitors=0)
             log.figures(figures)
             log.transcript.extend(r.model_dump(mode="json") for r in self.reasoner.records)
 

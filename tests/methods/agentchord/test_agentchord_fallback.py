@@ -43,3 +43,13 @@ def test_a_refused_replan_is_a_recorded_failure() -> None:
     c = _conductor(refuse)
     assert c.fall_back(c.graph.edge("e0")) is False
     assert [e.kind for e in c.log.events] == ["replan", "replan refused"]
+
+
+def test_the_run_figures_count_the_replans_and_old_records_read_as_none() -> None:
+    from kintsugi.methods.agentchord.method import RunFigures
+
+    old = dict(episode_steps=10, modelled_execution_time_s=1.0, latency_model_s=5.0, planning_reasoning_calls=2,
+               runtime_reasoning_calls=0, recovery_latency_steps=[], recoveries=0, actions=3, graph_nodes=2,
+               graph_edges=1, monitors=0)
+    assert RunFigures(**old).replans == 0
+    assert RunFigures(**old, replans=2).replans == 2
