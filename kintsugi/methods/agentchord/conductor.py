@@ -309,7 +309,7 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
         if self.metrics.fired_at is not None:  # the first command after a firing: detection -> recovery
             self.metrics.recovery_latency_steps.append(self.robot_steps() - self.metrics.fired_at)
             self.metrics.fired_at = None
-        self._refresh_tops(call)
+        self.tops.before_grasp(call, self.robot.features)  # a knocked object's top, read again
         result = self.robot.execute(call)
         if getattr(result, "unseen", False) and not unplanned_ok:
             result = self._look_again(call, result)
@@ -341,16 +341,6 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
             # running it again in the same still scene would only refuse again
             raise ConductorError(f"{edge.id} {name} cannot be carried out: {result.message}")
         return True
-
-    def _refresh_tops(self, call: dict) -> None:
-        """Before a grasp: the taken objects' tops read again where their perceived axes no longer agree with the
-        tracked ones (`Tops.refresh`: knocked over while no hand held them), so the hand records the top it
-        really takes. Objects a hand holds now are left to the encoders."""
-        parts = [v for v in call.values() if isinstance(v, dict)] if call["action"] == "drive" else [call]
-        held = {o for (_, o) in self.tops.in_hand}
-        names = {p["obj"] for p in parts if p.get("action") == "grasp" and isinstance(p.get("obj"), str)} - held
-        if names:
-            self.tops.refresh(self.robot.features(names))
 
     def _look_again(self, call: dict, result: Any) -> Any:
         """Its object is not seen (a hand between it and the cameras): every empty hand goes back out of the

@@ -86,19 +86,15 @@ class EdgeSynthesis:
         object rolls anywhere: stood up where it lay, it stood beside the robot's body, where the joint-space
         carry that followed swept it through the other arm, or in the way of the other arm's grasp. The spot it
         was first seen at is the one the plan's reach and carries were made for."""
-        turns_up = any(a.name == "rotate_eef" and a.args.get("axis") == "closing" for a in edge.actions)
-        if not turns_up or not self._wants_upright(edge):
+        if not self._wants_upright(edge) or not any(a.name == "rotate_eef" and a.args.get("axis") == "closing"
+                                                    for a in edge.actions):
             return None
-        touching = self.robot.arm_state(call["arm"]).touching
-        for obj in sorted(k for k, n in touching.items() if n == 2):
+        plan = getattr(self.robot, "execute", None)
+        for obj in sorted(k for k, n in self.robot.arm_state(call["arm"]).touching.items() if n == 2):
             first = self.seen.get(obj)
-            if first is None or not self._clear(obj, first):
-                continue
-            moved = {**call, "x": round(first[0], 4), "y": round(first[1], 4)}
-            plan = getattr(self.robot, "execute", None)
-            if plan is not None and not plan(moved, plan_only=True).planned:
-                continue
-            return moved
+            moved = None if first is None else {**call, "x": round(first[0], 4), "y": round(first[1], 4)}
+            if moved and self._clear(obj, first) and (plan is None or plan(moved, plan_only=True).planned):
+                return moved
         return None
 
     def _place_call(self, call: dict) -> dict:

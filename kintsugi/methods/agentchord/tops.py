@@ -82,6 +82,16 @@ class Tops:
         if stale:
             self.observe(stale)
 
+    def before_grasp(self, call: Mapping[str, Any], perceive: Any) -> None:
+        """Before an action: the objects its grasps take (a `drive`'s per-arm calls too) have their tops read
+        again (`refresh`, from `perceive(names)`) so the hand records the top it really takes; objects a hand
+        holds now are left to the encoders."""
+        parts = [v for v in call.values() if isinstance(v, dict)] if call.get("action") == "drive" else [call]
+        held = {o for (_, o) in self.in_hand}
+        names = {p["obj"] for p in parts if p.get("action") == "grasp" and isinstance(p.get("obj"), str)} - held
+        if names:
+            self.refresh(perceive(names))
+
     def follow(self, arms: Mapping[str, Any]) -> None:
         """After an action: objects a hand holds turn with it; one that left a hand keeps the hand's last turn."""
         for arm, state in arms.items():

@@ -56,3 +56,20 @@ def test_a_containers_fitted_opening_signs_its_top_as_a_cap_does() -> None:
     opening = (0.3 - 0.045, -0.1, 0.03)  # the open end at -x: it fell over that way
     tops.observe({"cup": _Seen(axis=(1.0, 0.0, 0.0), extremes={"opening": opening})})
     assert np.allclose(tops.world["cup"], [-1.0, 0.0, 0.0])
+
+
+def test_before_a_grasp_only_the_objects_it_takes_and_no_hand_holds_are_read() -> None:
+    tops = Tops()
+    tops.world.update(bottle=UP.copy(), cup=UP.copy())
+    tops.in_hand[("left", "cup")] = UP.copy()
+    asked: list[set[str]] = []
+
+    def perceive(names: set[str]) -> dict:
+        asked.append(set(names))
+        return {n: _Seen(axis=(1.0, 0.0, 0.0), extremes={"cap": (0.39, -0.1, 0.03)}) for n in names}
+
+    tops.before_grasp({"action": "move_by_offset", "arm": "right"}, perceive)
+    assert asked == []
+    tops.before_grasp({"action": "drive", "left": {"action": "grasp", "arm": "left", "obj": "cup"},
+                       "right": {"action": "grasp", "arm": "right", "obj": "bottle"}}, perceive)
+    assert asked == [{"bottle"}] and np.allclose(tops.world["bottle"], [1.0, 0.0, 0.0])
