@@ -47,7 +47,10 @@ def test_agentchord_plans_the_example_from_its_instruction() -> None:
     from kintsugi.reasoning import make_reasoner
 
     task = TASKS.get("green-left-of-purple").factory()
-    cfg = task.config({})
+    # At the middle of its range the green block already stands 20 cm left of the purple one and 7 cm behind it,
+    # which the scorer's left_of (within 8 cm front to back) accepts: the goal would hold before anything moves.
+    # Drawn 10 cm behind, it must be moved.
+    cfg = task.config({"objects.green_block.x_m": (0.36, 0.36)})
     episode = task.episode(cfg, "default", "none", 0)
     try:
         compiled = compile_graph(make_reasoner(ReasonerSettings()), task.spec,
