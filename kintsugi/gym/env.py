@@ -66,6 +66,7 @@ class KintsugiEnv(gym.Env):
         if render_mode not in (None, "rgb_array"):
             raise KintsugiError(f"render_mode must be None or 'rgb_array', not {render_mode!r}")
         self.images, self.reward_kind, self.shaped_scale = images, reward, shaped_scale
+        self._shaped = reward == "shaped"
         self.score_every_s, self.period_s, self.render_mode = score_every_s, period_s, render_mode
         if perceived and self.task.system != "tabletop":
             raise KintsugiError(f"perceived=True adds the tabletop robot's perceived object features; {task} is "
@@ -93,6 +94,9 @@ class KintsugiEnv(gym.Env):
         self._t_end = self.max_seconds - 1e-9
         self._succeeded = False
         self._last_action: np.ndarray | None = None
+        self._world = self.driver.world
+        self._data = self._world.data
+        """The driven world and its MjData, bound once: the step reads the clock and the step count from them."""
 
     def reset(self, *, seed: int | None = None, options: dict[str, Any] | None = None):  # noqa: ANN201
         super().reset(seed=seed)
@@ -103,28 +107,24 @@ class KintsugiEnv(gym.Env):
 
     def step(self, action: Any):  # noqa: ANN201
         d = self.driver
-        d.apply(action)
-        error = None
-        try:
-            d.tick()
-        except KintsugiError as exc:
-            error = f"{type(exc).__name__}: {exc}"
-        t = d.sim_time
+        obs, error = d.advance(action, self.images)
+        if error is not None:
+            return self._failed(action, error)
+        t = self._data.time
         truncated = t >= self._t_end
         reward = 0.0
-        if error is None and not self._succeeded and (truncated or d.steps % self.score_every == 0):
-            if bool(self.episode.score()[0]):
-                self._succeeded = True
-                reward = 1.0
-        if self.reward_kind == "shaped":
+        if not self._succeeded and (truncated or d.steps % self.score_every == 0) and self.episode.score()[0]:
+            self._succeeded = True
+            reward = 1.0
+        if self._shaped:
             reward -= self._change(d.clip(action))
-        terminated = self._succeeded or error is not None
-        obs = d.observe(self.images) if error is None else self._zeros()
-        info = {**self._ids, "success": self._succeeded, "sim_time": t, "physics_steps": d.physics_steps,
-                "steps": d.steps}
-        if error is not None:
-            info["error"] = error
-        return obs, reward, terminated, truncated and not terminated, info
+        success = self._succeeded
+        info = self._ids.copy()  # the trial's fixed fields, then this step's
+        info["success"] = success
+        info["sim_time"] = t
+        info["physics_steps"] = self._world.steps
+        info["steps"] = d.steps
+        return obs, reward, success, truncated and not success, info
 
     def _change(self, a: np.ndarray) -> float:
         """The shaped term: `shaped_scale` x the mean normalised change of the action since the last step."""

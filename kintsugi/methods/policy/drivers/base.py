@@ -23,6 +23,7 @@ import numpy as np
 from kintsugi.core.errors import KintsugiError
 
 INF = math.inf
+F64 = np.dtype(np.float64)
 
 
 class DriverError(KintsugiError):
@@ -65,12 +66,30 @@ class Driver(ABC):
 
     def clip_values(self, action: Any) -> list[float]:
         """The action clipped to the bounds, as floats (plain Python: this runs every control period, and numpy
-        calls on a handful of values cost more than the physics of a light world)."""
+        calls on a handful of values cost more than the physics of a light world). A 1-D float64 array of the
+        right length with a finite sum (the common case: its values are floats already, and a finite sum means
+        every value is finite) is clipped in one loop; anything else takes `_clip_checked`, which names the fault."""
+        bounds = self._bounds
+        if bounds is None:
+            bounds = self._bounds = (self.action_low.tolist(), self.action_high.tolist())
+        if type(action) is np.ndarray and action.dtype is F64 and action.ndim == 1:
+            vals = action.tolist()
+            lo, hi = bounds
+            if len(vals) == len(lo) and -INF < sum(vals) < INF:
+                i = 0
+                for v in vals:
+                    if v < lo[i]:
+                        vals[i] = lo[i]
+                    elif v > hi[i]:
+                        vals[i] = hi[i]
+                    i += 1
+                return vals
+        return self._clip_checked(action, bounds)
+
+    def _clip_checked(self, action: Any, bounds: tuple[list[float], list[float]]) -> list[float]:
+        """`clip_values` for any input: a sequence of numbers, or a `DriverError` saying what is wrong with it."""
         try:
             vals = action.ravel().tolist() if isinstance(action, np.ndarray) else [float(v) for v in action]
-            bounds = self._bounds
-            if bounds is None:
-                bounds = self._bounds = (self.action_low.tolist(), self.action_high.tolist())
             if len(vals) != len(bounds[0]):
                 raise DriverError(f"a {self.family} action has {len(self.action_names)} values "
                                   f"({', '.join(self.action_names)}), not {len(vals)}")
@@ -95,6 +114,18 @@ class Driver(ABC):
     @abstractmethod
     def command(self) -> np.ndarray:
         """The command in force, as an action vector (what `apply` would take to send it again)."""
+
+    def advance(self, action: Any, images: bool = True) -> tuple[dict[str, np.ndarray] | None, str | None]:
+        """One period of a policy's loop: `apply(action)`, `tick()`, `observe(images)`. A bad action raises
+        (`DriverError`, before any physics); a failing tick (a diverged simulation) is returned, not raised:
+        `(None, "<ErrorType>: <message>")`, else `(observation, None)`. A driver may override it to reuse what
+        its `apply` just wrote (nothing runs between the three but the world's own tick)."""
+        self.apply(action)
+        try:
+            self.tick()
+        except KintsugiError as exc:
+            return None, f"{type(exc).__name__}: {exc}"
+        return self.observe(images), None
 
     # --- the observation ----------------------------------------------------------------------
     @abstractmethod

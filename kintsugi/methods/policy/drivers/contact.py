@@ -41,17 +41,27 @@ class ContactDriver(Driver):
         self._low, self._high = rng[:, 0].copy(), rng[:, 1].copy()
         self.objects = tuple(self.world.layout.objects)
         lay = self.world.layout
-        self._qidx = np.concatenate([lay.ee_qpos, lay.finger_qpos,
-                                     *(np.arange(lay.obj_qpos[k], lay.obj_qpos[k] + 7) for k in self.objects)])
-        self._vidx = np.concatenate([lay.ee_dof, lay.finger_dof,
-                                     *(np.arange(lay.obj_dof[k], lay.obj_dof[k] + 6) for k in self.objects)])
         s = lay.sensors
-        self._sidx = np.concatenate([np.arange(s[k].start, s[k].stop) for k in ("ft_force", "ft_torque")]
-                                    + [[s["touch_l"].start, s["touch_r"].start]])
-        self._hand_weight = lay.hand_weight_n
         d = self.world.data
         self._ctrl, self._qpos, self._qvel, self._sens = d.ctrl, d.qpos, d.qvel, d.sensordata
-        """Index arrays resolved once (what `robot.observe` reads): one gather per source each step."""
+        """Views of the MjData buffers (fixed for the world's life), without a binding call per read."""
+        self._cm, self._qp, self._sp = memoryview(d.ctrl), memoryview(d.qpos), memoryview(d.sensordata)
+        """The same as flat memoryviews, for the items read or written as floats."""
+        self._yaw, self._hand_weight = int(lay.ee_qpos[3]), lay.hand_weight_n
+        self._f = s["ft_force"].start
+        idx = np.intp  # the index type numpy gathers with, so that no gather casts its index first
+        self._ee, self._ee_vel = lay.ee_qpos.astype(idx), lay.ee_dof.astype(idx)
+        self._fingers, self._finger_vel = lay.finger_qpos.astype(idx), lay.finger_dof.astype(idx)
+        self._torque = np.arange(s["ft_torque"].start, s["ft_torque"].stop, dtype=idx)
+        self._touch = np.array([s["touch_l"].start, s["touch_r"].start], dtype=idx)
+        self._tracked = []
+        for name in self.objects:
+            a, b = int(lay.obj_qpos[name]), int(lay.obj_dof[name])
+            self._tracked.append((name, f"{name}_pos", f"{name}_quat", f"{name}_lin_vel", f"{name}_ang_vel",
+                                  np.arange(a, a + 3, dtype=idx), np.arange(a + 3, a + 7, dtype=idx),
+                                  np.arange(b, b + 3, dtype=idx), np.arange(b + 3, b + 6, dtype=idx)))
+        """Index arrays resolved once (what `robot.observe` reads): every entry is one gather from its MjData
+        array, which makes the entry's own fresh array (the cheapest way numpy makes one)."""
 
     @property
     def action_low(self) -> np.ndarray:
@@ -62,7 +72,9 @@ class ContactDriver(Driver):
         return self._high
 
     def apply(self, action: Any) -> None:
-        self._ctrl[:] = self.clip_values(action)
+        cm = self._cm  # world.data.ctrl[:] = the clipped action, item by item
+        for i, v in enumerate(self.clip_values(action)):
+            cm[i] = v
 
     def command(self) -> np.ndarray:
         return self.world.data.ctrl.copy()
@@ -115,20 +127,28 @@ class ContactDriver(Driver):
 
     def observe(self, images: bool = True) -> dict[str, np.ndarray]:
         """What `robot.observe()` gives (proprioception, the tared wrist force, the pads, the pose tracker's
-        objects), read with index arrays resolved once: one gather per source, entries are views of it."""
-        q, v, sens = self._qpos[self._qidx], self._qvel[self._vidx], self._sens[self._sidx]
-        yaw = q[3]
-        c, s = np.cos(yaw), np.sin(yaw)
-        rx, ry, rz = sens[0], sens[1], sens[2]  # tared_force_world: the hand frame's pull, rotated to the world
-        out = {"ee": q[0:4], "ee_vel": v[0:4], "fingers": q[4:6], "finger_vel": v[4:6],
-               "force": np.array([c * rx - s * ry, s * rx + c * ry, rz - self._hand_weight]),
-               "torque": sens[3:6], "touch": sens[6:8]}
-        for k, name in enumerate(self.objects):
-            a, b = 6 + 7 * k, 6 + 6 * k
-            out[f"{name}_pos"] = q[a:a + 3]
-            out[f"{name}_quat"] = np.array(self.continuous_values(name, q[a + 3:a + 7].tolist(), 0))
-            out[f"{name}_lin_vel"] = v[b:b + 3]
-            out[f"{name}_ang_vel"] = v[b + 3:b + 6]
+        objects), read with index arrays resolved once: one gather per entry. The force is
+        `tared_force_world`'s arithmetic on floats (numpy's cosine and sine of the yaw, as it takes them)."""
+        qpos, qvel, sens, sp, f = self._qpos, self._qvel, self._sens, self._sp, self._f
+        rx, ry, rz = sp[f], sp[f + 1], sp[f + 2]
+        yaw = self._qp[self._yaw]
+        c, s = float(np.cos(yaw)), float(np.sin(yaw))
+        out = {"ee": qpos[self._ee], "ee_vel": qvel[self._ee_vel], "fingers": qpos[self._fingers],
+               "finger_vel": qvel[self._finger_vel],
+               "force": np.array((c * rx - s * ry, s * rx + c * ry, rz - self._hand_weight)),
+               "torque": sens[self._torque], "touch": sens[self._touch]}
+        last = self._last_quat
+        for name, kp, kq, kl, ka, ip, iq, il, ia in self._tracked:
+            out[kp] = qpos[ip]
+            out[kq] = quat = qpos[iq]
+            w, x, y, z = q = quat.tolist()  # hemisphere-continuous: `continuous_values(name, q, 0)`
+            ref = last.get(name)
+            if (w < 0) if ref is None else (w * ref[0] + x * ref[1] + y * ref[2] + z * ref[3] < 0):
+                quat *= -1.0
+                q = [-w, -x, -y, -z]
+            last[name] = q
+            out[kl] = qvel[il]
+            out[ka] = qvel[ia]
         if images:
             out["image"] = self.render()
         return out

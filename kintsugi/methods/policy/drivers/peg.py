@@ -17,10 +17,12 @@ from typing import Any, Callable
 
 import numpy as np
 
-from kintsugi.methods.policy.drivers.base import Driver, Feature
+from kintsugi.core.errors import KintsugiError
+from kintsugi.methods.policy.drivers.base import F64, INF, Driver, Feature
 
 LOW = np.array([-0.15, -0.05, -math.radians(45.0)])
 HIGH = np.array([0.15, 0.30, math.radians(45.0)])
+(Y_LO, Z_LO, R_LO), (Y_HI, Z_HI, R_HI) = LOW.tolist(), HIGH.tolist()
 SLACK = 1.0 + 1e-9
 """A target this close to one period's reach is taken exactly (the skills' own steps land on their goal)."""
 
@@ -40,9 +42,15 @@ class PegDriver(Driver):
         self.control_hz = 1.0 / dt
         self._v_lin = ctl.speed_mm_s * 1e-3 * dt
         self._v_rot = math.radians(ctl.rot_speed_deg_s) * dt
+        self._reach_lin, self._reach_rot = self._v_lin * SLACK, self._v_rot * SLACK
         mocap = self.world._mocap
         self._mpos, self._mquat = self.world.data.mocap_pos[mocap], self.world.data.mocap_quat[mocap]
         """Views of the wrist base's commanded pose (what `world.base_pose` reads), read as floats each step."""
+        self._mp, self._mq = memoryview(self._mpos), memoryview(self._mquat)
+        """The same as flat memoryviews: an item read or write through one costs half a numpy index."""
+        self._qp, self._qz = memoryview(self.world.data.qpos), int(self.world._qz)
+        self._z_rest, self._z_stiffness = self.world._z_rest, self.world.cfg.wrist.z_stiffness
+        """The wrist's z spring: `robot.wrist_force_z()` is (qpos[qz] - rest) x stiffness, read here as floats."""
 
     @property
     def action_low(self) -> np.ndarray:
@@ -53,16 +61,47 @@ class PegDriver(Driver):
         return HIGH
 
     def apply(self, action: Any) -> None:
-        y1, z1, r1 = self.clip_values(action)
-        y, z, r = self._pose()
+        self._send(action)
+
+    def _send(self, action: Any) -> tuple[float, float, float, float]:
+        """Clip the target to the bounds, limit its step to one period's reach, write it to the base's mocap;
+        the values written (y, z, the quaternion's w and x). A 1-D float64 array of three finite values is read
+        and clipped inline (the control rate's common case, the same values `clip_values` gives); anything else
+        goes through `clip_values`, which names the fault."""
+        if type(action) is np.ndarray and action.dtype is F64 and action.ndim == 1 and len(action) == 3:
+            y1, z1, r1 = action.tolist()
+            if -INF < y1 + z1 + r1 < INF:  # all finite (a NaN or an infinity makes the sum one)
+                y1 = Y_LO if y1 < Y_LO else Y_HI if y1 > Y_HI else y1
+                z1 = Z_LO if z1 < Z_LO else Z_HI if z1 > Z_HI else z1
+                r1 = R_LO if r1 < R_LO else R_HI if r1 > R_HI else r1
+            else:
+                y1, z1, r1 = self.clip_values(action)
+        else:
+            y1, z1, r1 = self.clip_values(action)
+        p, q = self._mp, self._mq
+        y, z, r = p[1], p[2], 2 * math.atan2(q[1], q[0])  # world.base_pose()
         dist = math.hypot(y1 - y, z1 - z)
-        if dist > self._v_lin * SLACK:
+        if dist > self._reach_lin:
             y1, z1 = y + (y1 - y) * self._v_lin / dist, z + (z1 - z) * self._v_lin / dist
-        if abs(r1 - r) > self._v_rot * SLACK:
+        if abs(r1 - r) > self._reach_rot:
             r1 = r + math.copysign(self._v_rot, r1 - r)
-        p, q = self._mpos, self._mquat  # world.set_base((y1, z1, r1)), written item by item to its views
-        p[0], p[1], p[2] = 0.0, y1, z1
-        q[0], q[1], q[2], q[3] = math.cos(r1 / 2), math.sin(r1 / 2), 0.0, 0.0
+        # world.set_base((y1, z1, r1)), written item by item; the base's x and the quaternion's y and z parts
+        # stay the 0.0 every set_base writes (the base moves in the y-z plane and rolls about x)
+        p[1] = y1
+        p[2] = z1
+        q[0] = qw = math.cos(r1 / 2)
+        q[1] = qx = math.sin(r1 / 2)
+        return y1, z1, qw, qx
+
+    def advance(self, action: Any, images: bool = True) -> tuple[dict[str, np.ndarray] | None, str | None]:
+        """`apply`, `tick`, `observe` with the base pose observed from the floats `apply` wrote: the physics
+        step leaves the mocap alone, so they are the values `world.base_pose()` reads back after the tick."""
+        y, z, qw, qx = self._send(action)
+        try:
+            self.tick()
+        except KintsugiError as exc:
+            return None, f"{type(exc).__name__}: {exc}"
+        return self._observation(y, z, 2 * math.atan2(qx, qw), images), None
 
     def _pose(self) -> tuple[float, float, float]:
         """`world.base_pose()` as floats, without building an array."""
@@ -99,8 +138,18 @@ class PegDriver(Driver):
         return out
 
     def observe(self, images: bool = True) -> dict[str, np.ndarray]:
-        v = np.array((*self._pose(), self.robot.wrist_force_z()))  # one array, the entries are views of it
-        obs = {"base_pose": v[0:3], "wrist_force": v[3:4]}
+        p, q = self._mp, self._mq
+        return self._observation(p[1], p[2], 2 * math.atan2(q[1], q[0]), images)
+
+    def _observation(self, y: float, z: float, roll: float, images: bool) -> dict[str, np.ndarray]:
+        """The observation of base pose (y, z, roll) with `robot.wrist_force_z()` read as a float from the
+        MjData buffer, in two new arrays (an empty array filled item by item is the cheapest fresh array)."""
+        pose, force = np.empty(3), np.empty(1)
+        pose[0] = y
+        pose[1] = z
+        pose[2] = roll
+        force[0] = (self._qp[self._qz] - self._z_rest) * self._z_stiffness
+        obs = {"base_pose": pose, "wrist_force": force}
         if images:
             obs["image"] = self.world.render()
         return obs

@@ -63,18 +63,30 @@ class TabletopDriver(Driver):
         self._low, self._high = np.array(lows), np.array(highs)
         self._full = self.cfg.robot.gripper_max_opening_m
         ids = [self.world.arms[arm] for arm in ARMS]
-        self._act = np.concatenate([i.act for i in ids])
-        self._qidx = np.concatenate([*(i.qpos for i in ids), *(i.finger_qpos for i in ids)])
-        self._sites = np.array([i.tcp for i in ids])
-        self._site_ids = [int(i.tcp) for i in ids]
         d = self.world.data
+        self._data, self._model = d, m
         self._ctrl, self._qpos, self._xpos, self._xmat = d.ctrl, d.qpos, d.site_xpos, d.site_xmat
         """Views of the MjData buffers (fixed for the world's life), without a binding call per read."""
+        self._cm, self._qp = memoryview(d.ctrl), memoryview(d.qpos)
+        """The actuators' targets and the joint positions as flat memoryviews, for items written or read as floats."""
+        n = len(JOINTS) + 1  # one arm's action values: its joints, then its gripper
+        self._joint_ctrl = [(n * k + j, int(a)) for k, i in enumerate(ids) for j, a in enumerate(i.act)]
+        self._grip_ctrl = [(arm, n * k + n - 1, int(i.grip_act)) for k, (arm, i) in enumerate(zip(ARMS, ids))]
+        """(action index, actuator index) of every joint target; (arm, action index, actuator) of every gripper."""
+        idx = np.intp  # the index type numpy gathers with, so that no gather casts its index first
+        xpos = d.site_xpos.reshape(-1)  # a flat view: a site's position is three consecutive entries
+        self._arms = [(arm, f"{arm}_joint_pos", f"{arm}_eef_pos", f"{arm}_eef_quat", f"{arm}_gripper_opening",
+                       f"{arm}_pad_force", i.qpos.astype(idx), xpos, np.arange(3 * i.tcp, 3 * i.tcp + 3, dtype=idx),
+                       d.site_xmat[int(i.tcp)], int(i.finger_qpos[0]), int(i.finger_qpos[1]))
+                      for arm, i in zip(ARMS, ids)]
+        """Per arm: its name, its entries' keys, its joints' qpos (a gather), its tool site's position (a gather
+        from the flat positions) and rotation matrix (a view), its two fingers' qpos."""
         self._wxyz = np.empty(4)
-        self._keys = [tuple(f"{arm}_{k}" for k in ("joint_pos", "eef_pos", "eef_quat", "gripper_opening", "pad_force"))
-                      for arm in ARMS]
+        self._xyzw = np.array([1, 2, 3, 0], dtype=idx)
+        """The tool's quaternion as `mju_mat2Quat` writes it (w, x, y, z), and the gather to x, y, z, w."""
         self._pads = {g: k for k, i in enumerate(ids) for g in i.pads}
-        """Index arrays resolved once: both arms' joint actuators, joint and finger qpos, tool sites, pad geoms."""
+        self._force = np.zeros(6)
+        """Pad geoms -> arm; `mj_contactForce`'s output."""
 
     @property
     def action_low(self) -> np.ndarray:
@@ -85,11 +97,19 @@ class TabletopDriver(Driver):
         return self._high
 
     def apply(self, action: Any) -> None:
+        """`world.set_joint_targets` and `world.set_grip_travel` for both arms, written item by item to the
+        actuators' targets (the gripper's travel is its command in [0, 1] x the full opening, so within the range
+        `set_grip_travel` clamps to; a gripper the world holds open keeps its target until it lets go)."""
         a = self.clip_values(action)
+        cm = self._cm
+        for i, k in self._joint_ctrl:
+            cm[k] = a[i]
         w = self.world
-        self._ctrl[self._act] = a[0:6] + a[7:13]  # world.set_joint_targets for both arms at once
-        for i, arm in enumerate(ARMS):
-            w.set_grip_travel(arm, a[7 * i + 6] * self._full)
+        grip, forced, full = w._grip_ctrl, w._forced_open, self._full
+        for arm, i, k in self._grip_ctrl:
+            grip[arm] = travel = a[i] * full
+            if arm not in forced:
+                cm[k] = travel
 
     def command(self) -> np.ndarray:
         out: list[float] = []
@@ -149,29 +169,28 @@ class TabletopDriver(Driver):
 
     def observe(self, images: bool = True) -> dict[str, np.ndarray]:
         """The sensors as the world's own readers give them (`joint_positions`, `tcp_pose`, `gripper_opening`,
-        `pad_contacts`' force), read with index arrays resolved once and one gather per source."""
+        `pad_contacts`' force), read with index arrays resolved once: every array entry is one gather from its
+        MjData array (which makes the entry's own fresh array, the cheapest way numpy makes one)."""
         w = self.world
-        q = self._qpos[self._qidx]
-        pos = self._xpos[self._sites]
+        qpos, qp, wxyz, full, xyzw, last = self._qpos, self._qp, self._wxyz, self._full, self._xyzw, self._last_quat
         forces = self.pad_forces()
-        wxyz = self._wxyz
-        scalars: list[float] = []
-        for k, arm in enumerate(ARMS):
-            mujoco.mju_mat2Quat(wxyz, self._xmat[self._site_ids[k]])
-            qw, qx, qy, qz = wxyz.tolist()
-            scalars += self.continuous_values(arm, [qx, qy, qz, qw], 3)
-        fingers = q[12:16].tolist()
-        for k in range(len(ARMS)):
-            scalars += (self._full - (fingers[2 * k] + fingers[2 * k + 1]), forces[k])
-        sv = np.array(scalars)  # per arm the quaternion (4), then per arm the opening and the pad force
         obs: dict[str, np.ndarray] = {}
-        n = len(ARMS)
-        for k, (kj, kp, kq, ko, kf) in enumerate(self._keys):
-            obs[kj] = q[6 * k:6 * k + 6]
-            obs[kp] = pos[k]
-            obs[kq] = sv[4 * k:4 * k + 4]
-            obs[ko] = sv[4 * n + 2 * k:4 * n + 2 * k + 1]
-            obs[kf] = sv[4 * n + 2 * k + 1:4 * n + 2 * k + 2]
+        for k, (arm, kj, kp, kq, ko, kf, joints, xpos, site, xmat, f0, f1) in enumerate(self._arms):
+            obs[kj] = qpos[joints]
+            obs[kp] = xpos[site]
+            mujoco.mju_mat2Quat(wxyz, xmat)
+            obs[kq] = quat = wxyz[xyzw]
+            qw, qx, qy, qz = wxyz.tolist()  # hemisphere-continuous: `continuous_values(arm, [x, y, z, w], 3)`
+            ref = last.get(arm)
+            if (qw < 0) if ref is None else (qx * ref[0] + qy * ref[1] + qz * ref[2] + qw * ref[3] < 0):
+                quat *= -1.0
+                last[arm] = [-qx, -qy, -qz, -qw]
+            else:
+                last[arm] = [qx, qy, qz, qw]
+            obs[ko] = opening = np.empty(1)
+            opening[0] = full - (qp[f0] + qp[f1])  # world.gripper_opening
+            obs[kf] = force = np.empty(1)
+            force[0] = forces[k]
         if self.perceived:
             for name, f in self.robot.features().items():
                 seen = f.visible and f.centroid is not None
@@ -186,21 +205,24 @@ class TabletopDriver(Driver):
     def pad_forces(self) -> list[float]:
         """Per arm the total normal force on its finger pads (N), summed over contacts in the same order as
         `world.pad_contacts(arm)[1]`; only the contacts that touch a pad are visited."""
-        d = self.world.data
+        d = self._data
         out = [0.0] * len(ARMS)
         if d.ncon == 0:
             return out
-        pads = self._pads
-        buf = np.empty(6)
-        m = self.world.model
+        pads, buf, m = self._pads, self._force, self._model
+        force = mujoco.mj_contactForce
         for i, (a, b) in enumerate(d.contact.geom.tolist()):
-            k = pads.get(a, pads.get(b))
-            if k is None:
+            ka, kb = pads.get(a), pads.get(b)
+            if ka is None and kb is None:
                 continue
-            mujoco.mj_contactForce(m, d, i, buf)
-            out[k] += abs(buf[0])
-            if a in pads and b in pads and pads[a] != pads[b]:  # the two arms' pads touching each other
-                out[pads[b]] += abs(buf[0])
+            force(m, d, i, buf)
+            f = abs(buf.item(0))
+            if ka is None:
+                out[kb] += f
+            else:
+                out[ka] += f
+                if kb is not None and kb != ka:  # the two arms' pads touching each other
+                    out[kb] += f
         return out
 
     def render(self) -> np.ndarray:
