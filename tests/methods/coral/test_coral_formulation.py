@@ -189,6 +189,12 @@ def test_the_pivot_counts_as_done_only_with_the_box_down_on_the_table() -> None:
     env["box_lo"] = np.array([0.19, -0.03, 0.015])  # standing on the curb's top
     assert not bool(program.call("settle_done", env))
     env["box_lo"] = np.array([0.15, -0.03, 0.0])
+    slant = np.radians(10.0)  # over on its top but propped on the curb: one end up, creeping
+    env["box_up"] = np.array([np.sin(slant), 0.0, -np.cos(slant)])
+    assert not bool(program.call("settle_done", env))
+    env["box_up"] = np.array([0.0, 0.0, -1.0])  # lying on its top
+    assert bool(program.call("settle_done", env))
+    env["box_lo"] = np.array([0.15, -0.03, 0.0])
     env["box_up"] = np.array([0.0, 0.0, 1.0])  # still flat
     assert not bool(program.call("settle_done", env))
     # a box on the curb's top is pushed on off it; one already on the table needs nothing more

@@ -3,11 +3,17 @@
 
 from __future__ import annotations
 
+import math
+
 from kintsugi.methods.coral.costlib.templates import (Plan, approach, approach_blind, hold_code, settle, tilt_code,
                                                  timeout, touch_term, with_weights)
 from kintsugi.methods.coral.costlib.push import push
 from kintsugi.methods.coral.costlib.scene import back_face
 from kintsugi.methods.coral.types import ObjectState, StageSpec
+
+FLAT_DEG = 6.0
+"""A turned object is at rest only lying on a face: its up axis within this of vertical or level (twice the
+tracker's tilt error on a resting box)."""
 
 
 def _withdraw(plan: Plan, o: ObjectState, axis: int, sign: float, deg: float, k: dict[str, float], dz: float) -> None:
@@ -108,9 +114,12 @@ def pivot_done({n}_up):
 
 
 def turned_still({n}_up, {n}_vel, {n}_spin):
-    """Turned at least `flip_deg` and at rest."""
+    """Turned at least `flip_deg` and at rest, lying on a face: its up axis vertical or level within
+    {FLAT_DEG:g} degrees. An object propped at a slant (one end on the fixture) creeps at a few mm/s, which
+    the camera's velocity cannot tell from rest."""
     still = logical_and(norm({n}_vel) < 0.01, {n}_spin < 0.2)
-    return logical_and(still, {tilt_code(n, k["flip_deg"])})
+    flat = logical_or(abs({n}_up[..., 2]) > {math.cos(math.radians(FLAT_DEG)):.6f}, abs({n}_up[..., 2]) < {math.sin(math.radians(FLAT_DEG)):.6f})
+    return logical_and(logical_and(still, flat), {tilt_code(n, k["flip_deg"])})
 
 
 def on_table({n}_lo, {fixture}_lo):
