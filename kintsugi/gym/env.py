@@ -90,7 +90,9 @@ class KintsugiEnv(gym.Env):
         opts = {"period_s": self.period_s, "perceived": self.perceived} if self.task.system == "tabletop" else {}
         self.driver = driver_for(self.episode.robot, **opts)
         self.seed_used = seed
-        self._ids = {"task": self.task_name, "variant": self.variant, "condition": self.condition, "seed": seed}
+        self._ids = {"task": self.task_name, "variant": self.variant, "condition": self.condition, "seed": seed,
+                     "success": False, "sim_time": 0.0, "physics_steps": 0, "steps": 0}
+        """The info's fields, the trial's fixed ones filled: a step copies it (one table copy) and sets its own."""
         self._t_end = self.max_seconds - 1e-9
         self._succeeded = False
         self._last_action: np.ndarray | None = None
@@ -119,7 +121,7 @@ class KintsugiEnv(gym.Env):
         if self._shaped:
             reward -= self._change(d.clip(action))
         success = self._succeeded
-        info = self._ids.copy()  # the trial's fixed fields, then this step's
+        info = self._ids.copy()
         info["success"] = success
         info["sim_time"] = t
         info["physics_steps"] = self._world.steps
@@ -139,8 +141,8 @@ class KintsugiEnv(gym.Env):
 
     def _info(self) -> dict[str, Any]:
         d = self.driver
-        return {**self._ids, "success": self._succeeded, "sim_time": d.sim_time, "physics_steps": d.physics_steps,
-                "steps": d.steps}
+        return self._ids | {"success": self._succeeded, "sim_time": d.sim_time, "physics_steps": d.physics_steps,
+                            "steps": d.steps}
 
     def render(self) -> np.ndarray | None:
         return self.driver.render() if self.render_mode == "rgb_array" else None

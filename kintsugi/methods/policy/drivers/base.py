@@ -13,6 +13,7 @@ LeRobot feature list and a robomimic key set are all built from one description.
 
 from __future__ import annotations
 
+import functools
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
@@ -24,6 +25,30 @@ from kintsugi.core.errors import KintsugiError
 
 INF = math.inf
 F64 = np.dtype(np.float64)
+ND = np.ndarray
+
+
+@functools.lru_cache(maxsize=None)
+def clamp_function(n: int) -> Callable[[list[float], list[float], list[float]], list[float]]:
+    """`clamp(vals, lo, hi)`: the `n` values each clipped to its bounds, as a new list, in straight-line code
+    made once per length (a loop over a dozen values costs the interpreter about twice as much)."""
+    v, lo, hi = ([f"{c}{i}" for i in range(n)] for c in "vlh")
+    src = (f"def clamp(vals, lo, hi):\n    {', '.join(v)}, = vals\n    {', '.join(lo)}, = lo\n"
+           f"    {', '.join(hi)}, = hi\n    return [" + ", ".join(f"{a} if {x} < {a} else {b} if {x} > {b} else {x}"
+                                                          for x, a, b in zip(v, lo, hi)) + "]\n")
+    scope: dict[str, Any] = {}
+    exec(src, scope)  # noqa: S102 - source made above from the length alone
+    return scope["clamp"]
+
+
+@functools.lru_cache(maxsize=None)
+def scatter_function(pairs: tuple[tuple[int, int], ...]) -> Callable[[Any, list[float]], None]:
+    """`scatter(dst, vals)`: `dst[k] = vals[i]` for every `(i, k)` of `pairs`, in straight-line code made once
+    per mapping (what a driver writes to the actuators' targets each period)."""
+    body = "".join(f"    dst[{k}] = vals[{i}]\n" for i, k in pairs) or "    pass\n"
+    scope: dict[str, Any] = {}
+    exec(f"def scatter(dst, vals):\n{body}", scope)  # noqa: S102 - source made above from integers alone
+    return scope["scatter"]
 
 
 class DriverError(KintsugiError):
@@ -66,25 +91,22 @@ class Driver(ABC):
 
     def clip_values(self, action: Any) -> list[float]:
         """The action clipped to the bounds, as floats (plain Python: this runs every control period, and numpy
-        calls on a handful of values cost more than the physics of a light world). A 1-D float64 array of the
-        right length with a finite sum (the common case: its values are floats already, and a finite sum means
-        every value is finite) is clipped in one loop; anything else takes `_clip_checked`, which names the fault."""
-        bounds = self._bounds
-        if bounds is None:
-            bounds = self._bounds = (self.action_low.tolist(), self.action_high.tolist())
-        if type(action) is np.ndarray and action.dtype is F64 and action.ndim == 1:
+        calls on a handful of values cost more than the physics of a light world). A float64 array of finite
+        values (the common case: its values are floats already, and a finite sum means every value is finite) is
+        clipped by `clamp_function`'s straight-line code; anything else (a list, another dtype, a wrong length or
+        shape: the unpacking or the comparisons refuse it) takes `_clip_checked`, which names the fault."""
+        clamp = self._clamp
+        if clamp is None:
+            self._bounds = (self.action_low.tolist(), self.action_high.tolist())
+            clamp = self._clamp = clamp_function(len(self._bounds[0]))
+        if type(action) is ND and action.dtype is F64:
             vals = action.tolist()
-            lo, hi = bounds
-            if len(vals) == len(lo) and -INF < sum(vals) < INF:
-                i = 0
-                for v in vals:
-                    if v < lo[i]:
-                        vals[i] = lo[i]
-                    elif v > hi[i]:
-                        vals[i] = hi[i]
-                    i += 1
-                return vals
-        return self._clip_checked(action, bounds)
+            try:
+                if -INF < sum(vals) < INF:
+                    return clamp(vals, *self._bounds)
+            except (TypeError, ValueError):
+                pass
+        return self._clip_checked(action, self._bounds)
 
     def _clip_checked(self, action: Any, bounds: tuple[list[float], list[float]]) -> list[float]:
         """`clip_values` for any input: a sequence of numbers, or a `DriverError` saying what is wrong with it."""
@@ -101,7 +123,8 @@ class Driver(ABC):
             raise DriverError(f"a {self.family} action must be finite, got {vals}")
         return out
 
-    _bounds: tuple[list[float], list[float]] | None = None
+    _bounds: tuple[list[float], list[float]] = ([], [])
+    _clamp: Callable[[list[float], list[float], list[float]], list[float]] | None = None
 
     @abstractmethod
     def apply(self, action: Any) -> None:

@@ -18,7 +18,7 @@ from typing import Any, Callable
 import numpy as np
 
 from kintsugi.core.errors import KintsugiError
-from kintsugi.methods.policy.drivers.base import F64, INF, Driver, Feature
+from kintsugi.methods.policy.drivers.base import F64, INF, ND, Driver, Feature
 
 LOW = np.array([-0.15, -0.05, -math.radians(45.0)])
 HIGH = np.array([0.15, 0.30, math.radians(45.0)])
@@ -65,18 +65,20 @@ class PegDriver(Driver):
 
     def _send(self, action: Any) -> tuple[float, float, float, float]:
         """Clip the target to the bounds, limit its step to one period's reach, write it to the base's mocap;
-        the values written (y, z, the quaternion's w and x). A 1-D float64 array of three finite values is read
-        and clipped inline (the control rate's common case, the same values `clip_values` gives); anything else
-        goes through `clip_values`, which names the fault."""
-        if type(action) is np.ndarray and action.dtype is F64 and action.ndim == 1 and len(action) == 3:
+        the values written (y, z, the quaternion's w and x). A float64 array of three finite values is read and
+        clipped inline (the control rate's common case, the same values `clip_values` gives); anything else (a
+        list, another dtype, a wrong length or shape: the unpacking or the sum refuses it) goes through
+        `clip_values`, which names the fault."""
+        try:
+            if type(action) is not ND or action.dtype is not F64:
+                raise TypeError
             y1, z1, r1 = action.tolist()
-            if -INF < y1 + z1 + r1 < INF:  # all finite (a NaN or an infinity makes the sum one)
-                y1 = Y_LO if y1 < Y_LO else Y_HI if y1 > Y_HI else y1
-                z1 = Z_LO if z1 < Z_LO else Z_HI if z1 > Z_HI else z1
-                r1 = R_LO if r1 < R_LO else R_HI if r1 > R_HI else r1
-            else:
-                y1, z1, r1 = self.clip_values(action)
-        else:
+            if not -INF < y1 + z1 + r1 < INF:  # not all finite (a NaN or an infinity makes the sum one)
+                raise TypeError
+            y1 = Y_LO if y1 < Y_LO else Y_HI if y1 > Y_HI else y1
+            z1 = Z_LO if z1 < Z_LO else Z_HI if z1 > Z_HI else z1
+            r1 = R_LO if r1 < R_LO else R_HI if r1 > R_HI else r1
+        except (TypeError, ValueError):
             y1, z1, r1 = self.clip_values(action)
         p, q = self._mp, self._mq
         y, z, r = p[1], p[2], 2 * math.atan2(q[1], q[0])  # world.base_pose()
@@ -102,12 +104,6 @@ class PegDriver(Driver):
         except KintsugiError as exc:
             return None, f"{type(exc).__name__}: {exc}"
         return self._observation(y, z, 2 * math.atan2(qx, qw), images), None
-
-    def _pose(self) -> tuple[float, float, float]:
-        """`world.base_pose()` as floats, without building an array."""
-        _, y, z = self._mpos.tolist()
-        qw, qx, _, _ = self._mquat.tolist()
-        return y, z, 2 * math.atan2(qx, qw)
 
     def command(self) -> np.ndarray:
         return self.world.base_pose()
@@ -143,13 +139,10 @@ class PegDriver(Driver):
 
     def _observation(self, y: float, z: float, roll: float, images: bool) -> dict[str, np.ndarray]:
         """The observation of base pose (y, z, roll) with `robot.wrist_force_z()` read as a float from the
-        MjData buffer, in two new arrays (an empty array filled item by item is the cheapest fresh array)."""
-        pose, force = np.empty(3), np.empty(1)
-        pose[0] = y
-        pose[1] = z
-        pose[2] = roll
+        MjData buffer, in two new arrays."""
+        force = np.empty(1)  # for one value, an empty array and an item write cost less than numpy.array
         force[0] = (self._qp[self._qz] - self._z_rest) * self._z_stiffness
-        obs = {"base_pose": pose, "wrist_force": force}
+        obs = {"base_pose": np.array((y, z, roll)), "wrist_force": force}
         if images:
             obs["image"] = self.world.render()
         return obs

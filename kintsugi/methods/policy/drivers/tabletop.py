@@ -18,12 +18,13 @@ action starts, so the replay meets the draws its source met).
 
 from __future__ import annotations
 
+from itertools import chain
 from typing import Any, Callable
 
 import mujoco
 import numpy as np
 
-from kintsugi.methods.policy.drivers.base import Driver, Feature
+from kintsugi.methods.policy.drivers.base import Driver, Feature, scatter_function
 from kintsugi.worlds.tabletop.arm_model import JOINTS
 from kintsugi.worlds.tabletop.config import ARMS
 from kintsugi.worlds.tabletop.scene import CAMERAS
@@ -70,9 +71,10 @@ class TabletopDriver(Driver):
         self._cm, self._qp = memoryview(d.ctrl), memoryview(d.qpos)
         """The actuators' targets and the joint positions as flat memoryviews, for items written or read as floats."""
         n = len(JOINTS) + 1  # one arm's action values: its joints, then its gripper
-        self._joint_ctrl = [(n * k + j, int(a)) for k, i in enumerate(ids) for j, a in enumerate(i.act)]
+        joints = tuple((n * k + j, int(a)) for k, i in enumerate(ids) for j, a in enumerate(i.act))
+        self._scatter = scatter_function(joints)
         self._grip_ctrl = [(arm, n * k + n - 1, int(i.grip_act)) for k, (arm, i) in enumerate(zip(ARMS, ids))]
-        """(action index, actuator index) of every joint target; (arm, action index, actuator) of every gripper."""
+        """Writes every joint target (action index -> actuator); (arm, action index, actuator) of every gripper."""
         idx = np.intp  # the index type numpy gathers with, so that no gather casts its index first
         xpos = d.site_xpos.reshape(-1)  # a flat view: a site's position is three consecutive entries
         self._arms = [(arm, f"{arm}_joint_pos", f"{arm}_eef_pos", f"{arm}_eef_quat", f"{arm}_gripper_opening",
@@ -102,8 +104,7 @@ class TabletopDriver(Driver):
         `set_grip_travel` clamps to; a gripper the world holds open keeps its target until it lets go)."""
         a = self.clip_values(action)
         cm = self._cm
-        for i, k in self._joint_ctrl:
-            cm[k] = a[i]
+        self._scatter(cm, a)
         w = self.world
         grip, forced, full = w._grip_ctrl, w._forced_open, self._full
         for arm, i, k in self._grip_ctrl:
@@ -210,8 +211,11 @@ class TabletopDriver(Driver):
         if d.ncon == 0:
             return out
         pads, buf, m = self._pads, self._force, self._model
+        geoms = d.contact.geom.tolist()
+        if pads.keys().isdisjoint(chain.from_iterable(geoms)):  # no pad touches anything
+            return out
         force = mujoco.mj_contactForce
-        for i, (a, b) in enumerate(d.contact.geom.tolist()):
+        for i, (a, b) in enumerate(geoms):
             ka, kb = pads.get(a), pads.get(b)
             if ka is None and kb is None:
                 continue
