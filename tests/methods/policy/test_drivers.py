@@ -110,3 +110,56 @@ def test_actions_are_clipped_to_the_bounds_as_floats() -> None:
         assert got[:2] == [d.action_high[0], d.action_low[1]] and all(type(v) is float for v in got)
     finally:
         ep.close()
+
+
+@pytest.mark.parametrize("task", ["peg-insertion", "pour-single", "push-force"])
+def test_every_driver_takes_any_shape_of_its_values_and_refuses_a_wrong_count_or_a_non_finite_value(task: str) -> None:
+    ep = _episode(task, TASKS.get(task).factory().default_conditions[0], 0)
+    try:
+        d = driver_for(ep.robot)
+        a = d.command()
+        for shaped in (a.reshape(-1, 1), a.reshape(1, -1), a.astype(np.float32), list(a)):
+            assert d.clip_values(shaped) == d.clip_values(np.asarray(shaped, dtype=np.float64).ravel())
+        for bad in (np.append(a, 0.0), a[:-1], np.where(np.arange(a.size) == 1, np.nan, a),
+                    np.where(np.arange(a.size) == 0, -np.inf, a)):
+            with pytest.raises(DriverError, match=f"{d.family} action"):
+                d.apply(bad)
+    finally:
+        ep.close()
+
+
+@pytest.mark.parametrize("task", ["peg-insertion", "pour-single", "push-force"])
+def test_the_fast_clip_is_the_checked_one(task: str) -> None:
+    ep = _episode(task, TASKS.get(task).factory().default_conditions[0], 0)
+    try:
+        d = driver_for(ep.robot)
+        lo, hi = d.action_low, d.action_high
+        rng = np.random.default_rng(0)
+        for _ in range(50):
+            a = rng.uniform(lo - 0.5 * (hi - lo), hi + 0.5 * (hi - lo))
+            assert d.clip_values(a) == np.clip(a, lo, hi).tolist() == d.clip_values(a.tolist())
+    finally:
+        ep.close()
+
+
+@pytest.mark.parametrize("task", ["peg-insertion", "pour-single", "push-force"])
+def test_advance_is_apply_tick_observe(task: str) -> None:
+    """A driver's fused step (what the environment calls) gives the observation `observe()` reads after the same
+    command, and the arrays it returned are never written again."""
+    eps = [_episode(task, TASKS.get(task).factory().default_conditions[0], 3) for _ in range(2)]
+    try:
+        a, b = (driver_for(ep.robot) for ep in eps)
+        target = a.command() + 0.05 * (a.action_high - a.action_low)  # rate-limited (peg), a move (others)
+        kept = []
+        for _ in range(60):
+            obs, error = a.advance(target, images=False)
+            b.apply(target)
+            b.tick()
+            ref = b.observe(images=False)
+            assert error is None and list(obs) == list(ref)
+            assert all(np.array_equal(obs[k], ref[k]) for k in obs)
+            kept.append((obs, {k: v.copy() for k, v in obs.items()}))
+        assert all(np.array_equal(o[k], c[k]) for o, c in kept for k in o)
+    finally:
+        for ep in eps:
+            ep.close()
