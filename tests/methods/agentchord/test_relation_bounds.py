@@ -1,5 +1,6 @@
-"""The method's side relations read the scorers' bounds shrunk by perception's measured error on a relative
-centre (`RELATION_MARGIN_M`): never looser than the scorer, and no stricter than that error requires."""
+"""The method's side relations and `on_table` read the scorers' bounds shrunk by perception's measured error
+(`RELATION_MARGIN_M` on a relative centre, `ON_TABLE_MARGIN_M` on a resting object's lowest point): never looser
+than the scorer, and no stricter than that error requires."""
 
 from __future__ import annotations
 
@@ -43,3 +44,31 @@ def test_the_perceived_check_accepts_what_the_scorer_accepts_beyond_the_margin(s
     for dy in (lo - 0.001, lo + 0.99 * m, hi - 0.99 * m, hi + 0.001):
         assert not holds(0.0, dy)
     assert not holds(judge.SIDE_ALONG_M - 0.99 * m, 0.15)
+
+
+def test_on_table_is_the_scorers_bound_shrunk_by_the_perception_margin() -> None:
+    m = domain.ON_TABLE_MARGIN_M
+    assert 0.0 < m < judge.TABLE_Z_M
+    assert domain.ON_TABLE_M == pytest.approx((-(judge.TABLE_Z_M - m), judge.TABLE_Z_M - m))
+
+
+@pytest.mark.parametrize("name", ["on_table", "beside"])
+def test_the_perceived_on_table_check_accepts_only_bottoms_the_scorer_accepts_beyond_the_margin(name: str) -> None:
+    from types import SimpleNamespace
+
+    from kintsugi.taskgraph.constraints import InRegion
+    from kintsugi.taskgraph.features import Features
+
+    spec = next(p for p in domain.PREDICATES if p.name == name)
+    c = next(c for c in spec.constraints if c["kind"] == "in_region")
+    check = InRegion.model_validate({**c, "point": {**c["point"], "entity": "x"}})
+
+    def holds(z: float) -> bool:
+        o = SimpleNamespace(centroid=(0.4, 0.1, z + 0.03), visible=True, extremes={"bottom": (0.4, 0.1, z)})
+        return check.evaluate(Features(objects={"x": o})) <= 0.0
+
+    m, tol = domain.ON_TABLE_MARGIN_M, judge.TABLE_Z_M
+    for z in (-(tol - 1.01 * m), 0.0, 0.003, tol - 1.01 * m):
+        assert holds(z)
+    for z in (-(tol + 0.001), -(tol - 0.99 * m), tol - 0.99 * m, tol + 0.001, 0.02):
+        assert not holds(z)
