@@ -27,6 +27,7 @@ from typing import Any, Callable
 import numpy as np
 from rich.markup import escape
 
+from kintsugi.core.errors import ReasoningError
 from kintsugi.core.log import TrialLog
 from kintsugi.core.record import SkillLog
 from kintsugi.methods.agentchord.conducting import ConductorConfig, ConductorError, Metrics, objects_of, proprioceptive
@@ -190,8 +191,10 @@ class Conductor(Recovering, Settling, Reaching, Pouring):
                        f"({self.metrics.replans} of {self.config.max_replans})")
         try:
             graph = self.replan()
-        except PlanningError as exc:
-            self.log.event(self.robot.sim_time, "replan refused", f"{exc}; the trial ends as a failure")
+        except ReasoningError as exc:  # a refused plan, a model's reply unusable after its repair round, ...
+            refused = isinstance(exc, PlanningError)
+            self.log.event(self.robot.sim_time, "replan refused" if refused else "replan failed",
+                           f"{'' if refused else type(exc).__name__ + ': '}{exc}; the trial ends as a failure")
             return False
         if graph is None:
             self.log.event(self.robot.sim_time, "goal check", "the re-planner finds the goal already holds")

@@ -18,7 +18,7 @@ from __future__ import annotations
 import functools
 from typing import Any, Literal
 
-from kintsugi.core.errors import ConfigError
+from kintsugi.core.errors import ConfigError, ReasoningError
 from kintsugi.core.registry import METHODS
 from kintsugi.methods.agentchord.compile import compile_graph, persistent_monitors
 from kintsugi.methods.agentchord.conducting import ConductorConfig, ConductorError, Metrics, firing_arm
@@ -78,10 +78,12 @@ class Replanning:
                     log.event(robot.sim_time, "replan", "the composer finds the goal already holds")
                     ok = True
                     break
-                except PlanningError as exc:
+                except ReasoningError as exc:  # a refused plan, a model's reply unusable after its repair round
                     if attempt == 0:
                         raise
-                    log.event(robot.sim_time, "replan refused", f"{exc}; the trial ends as a failure")
+                    refused = isinstance(exc, PlanningError)
+                    log.event(robot.sim_time, "replan refused" if refused else "replan failed",
+                              f"{'' if refused else type(exc).__name__ + ': '}{exc}; the trial ends as a failure")
                     break
                 self.node_facts = composed.node_facts
                 if attempt == 0:
