@@ -88,7 +88,9 @@ class TabletopDriver(Driver):
         """The tool's quaternion as `mju_mat2Quat` writes it (w, x, y, z), and the gather to x, y, z, w."""
         self._pads = {g: k for k, i in enumerate(ids) for g in i.pads}
         self._force = np.zeros(6)
-        """Pad geoms -> arm; `mj_contactForce`'s output."""
+        self._contacts = d.contact
+        """Pad geoms -> arm; `mj_contactForce`'s output; the contact list's binding, made once (it reads the
+        current contacts at each access, as `data.contact` would give them)."""
 
     @property
     def action_low(self) -> np.ndarray:
@@ -211,7 +213,7 @@ class TabletopDriver(Driver):
         if d.ncon == 0:
             return out
         pads, buf, m = self._pads, self._force, self._model
-        geoms = d.contact.geom.tolist()
+        geoms = self._contacts.geom.tolist()
         if pads.keys().isdisjoint(chain.from_iterable(geoms)):  # no pad touches anything
             return out
         force = mujoco.mj_contactForce
