@@ -13,7 +13,6 @@ LeRobot feature list and a robomimic key set are all built from one description.
 
 from __future__ import annotations
 
-import functools
 import math
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
@@ -28,27 +27,15 @@ F64 = np.dtype(np.float64)
 ND = np.ndarray
 
 
-@functools.lru_cache(maxsize=None)
-def clamp_function(n: int) -> Callable[[list[float], list[float], list[float]], list[float]]:
-    """`clamp(vals, lo, hi)`: the `n` values each clipped to its bounds, as a new list, in straight-line code
-    made once per length (a loop over a dozen values costs the interpreter about twice as much)."""
-    v, lo, hi = ([f"{c}{i}" for i in range(n)] for c in "vlh")
-    src = (f"def clamp(vals, lo, hi):\n    {', '.join(v)}, = vals\n    {', '.join(lo)}, = lo\n"
-           f"    {', '.join(hi)}, = hi\n    return [" + ", ".join(f"{a} if {x} < {a} else {b} if {x} > {b} else {x}"
-                                                          for x, a, b in zip(v, lo, hi)) + "]\n")
-    scope: dict[str, Any] = {}
-    exec(src, scope)  # noqa: S102 - source made above from the length alone
-    return scope["clamp"]
+def clamp(vals: list[float], lo: list[float], hi: list[float]) -> list[float]:
+    """Each value clipped to its bounds, as a new list (the lists have one length)."""
+    return [a if v < a else b if v > b else v for v, a, b in zip(vals, lo, hi)]
 
 
-@functools.lru_cache(maxsize=None)
-def scatter_function(pairs: tuple[tuple[int, int], ...]) -> Callable[[Any, list[float]], None]:
-    """`scatter(dst, vals)`: `dst[k] = vals[i]` for every `(i, k)` of `pairs`, in straight-line code made once
-    per mapping (what a driver writes to the actuators' targets each period)."""
-    body = "".join(f"    dst[{k}] = vals[{i}]\n" for i, k in pairs) or "    pass\n"
-    scope: dict[str, Any] = {}
-    exec(f"def scatter(dst, vals):\n{body}", scope)  # noqa: S102 - source made above from integers alone
-    return scope["scatter"]
+def scatter(dst: Any, vals: list[float], pairs: tuple[tuple[int, int], ...]) -> None:
+    """`dst[k] = vals[i]` for every `(i, k)` of `pairs`: what a driver writes to the actuators' targets."""
+    for i, k in pairs:
+        dst[k] = vals[i]
 
 
 class DriverError(KintsugiError):
@@ -93,19 +80,15 @@ class Driver(ABC):
         """The action clipped to the bounds, as floats (plain Python: this runs every control period, and numpy
         calls on a handful of values cost more than the physics of a light world). A float64 array of finite
         values (the common case: its values are floats already, and a finite sum means every value is finite) is
-        clipped by `clamp_function`'s straight-line code; anything else (a list, another dtype, a wrong length or
-        shape: the unpacking or the comparisons refuse it) takes `_clip_checked`, which names the fault."""
-        clamp = self._clamp
-        if clamp is None:
-            self._bounds = (self.action_low.tolist(), self.action_high.tolist())
-            clamp = self._clamp = clamp_function(len(self._bounds[0]))
+        clipped in one pass; anything else (a list, another dtype, a wrong length or shape) takes `_clip_checked`,
+        which names the fault."""
+        lo, hi = self._bounds
+        if not lo:
+            lo, hi = self._bounds = (self.action_low.tolist(), self.action_high.tolist())
         if type(action) is ND and action.dtype is F64:
             vals = action.tolist()
-            try:
-                if -INF < sum(vals) < INF:
-                    return clamp(vals, *self._bounds)
-            except (TypeError, ValueError):
-                pass
+            if len(vals) == len(lo) and type(vals[0]) is float and -INF < sum(vals) < INF:
+                return clamp(vals, lo, hi)
         return self._clip_checked(action, self._bounds)
 
     def _clip_checked(self, action: Any, bounds: tuple[list[float], list[float]]) -> list[float]:
@@ -124,7 +107,6 @@ class Driver(ABC):
         return out
 
     _bounds: tuple[list[float], list[float]] = ([], [])
-    _clamp: Callable[[list[float], list[float], list[float]], list[float]] | None = None
 
     @abstractmethod
     def apply(self, action: Any) -> None:

@@ -19,7 +19,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from kintsugi.methods.policy.drivers.base import Driver, DriverError, Feature, scatter_function
+from kintsugi.methods.policy.drivers.base import Driver, DriverError, Feature, scatter
 
 ACTION_NAMES = ("x", "y", "z", "yaw", "opening")
 
@@ -47,7 +47,7 @@ class ContactDriver(Driver):
         """Views of the MjData buffers (fixed for the world's life), without a binding call per read."""
         self._cm, self._qp, self._sp = memoryview(d.ctrl), memoryview(d.qpos), memoryview(d.sensordata)
         """The same as flat memoryviews, for the items read or written as floats."""
-        self._scatter = scatter_function(tuple((i, i) for i in range(len(ACTION_NAMES))))
+        self._pairs = tuple((i, i) for i in range(len(ACTION_NAMES)))
         self._yaw, self._hand_weight = int(lay.ee_qpos[3]), lay.hand_weight_n
         self._f = s["ft_force"].start
         idx = np.intp  # the index type numpy gathers with, so that no gather casts its index first
@@ -73,7 +73,7 @@ class ContactDriver(Driver):
         return self._high
 
     def apply(self, action: Any) -> None:
-        self._scatter(self._cm, self.clip_values(action))  # world.data.ctrl[:] = the clipped action
+        scatter(self._cm, self.clip_values(action), self._pairs)  # world.data.ctrl[:] = the clipped action
 
     def command(self) -> np.ndarray:
         return self.world.data.ctrl.copy()

@@ -24,7 +24,7 @@ from typing import Any, Callable
 import mujoco
 import numpy as np
 
-from kintsugi.methods.policy.drivers.base import Driver, Feature, scatter_function
+from kintsugi.methods.policy.drivers.base import Driver, Feature, scatter
 from kintsugi.worlds.tabletop.arm_model import JOINTS
 from kintsugi.worlds.tabletop.config import ARMS
 from kintsugi.worlds.tabletop.scene import CAMERAS
@@ -72,7 +72,7 @@ class TabletopDriver(Driver):
         """The actuators' targets and the joint positions as flat memoryviews, for items written or read as floats."""
         n = len(JOINTS) + 1  # one arm's action values: its joints, then its gripper
         joints = tuple((n * k + j, int(a)) for k, i in enumerate(ids) for j, a in enumerate(i.act))
-        self._scatter = scatter_function(joints)
+        self._pairs = joints
         self._grip_ctrl = [(arm, n * k + n - 1, int(i.grip_act)) for k, (arm, i) in enumerate(zip(ARMS, ids))]
         """Writes every joint target (action index -> actuator); (arm, action index, actuator) of every gripper."""
         idx = np.intp  # the index type numpy gathers with, so that no gather casts its index first
@@ -106,7 +106,7 @@ class TabletopDriver(Driver):
         `set_grip_travel` clamps to; a gripper the world holds open keeps its target until it lets go)."""
         a = self.clip_values(action)
         cm = self._cm
-        self._scatter(cm, a)
+        scatter(cm, a, self._pairs)
         w = self.world
         grip, forced, full = w._grip_ctrl, w._forced_open, self._full
         for arm, i, k in self._grip_ctrl:
