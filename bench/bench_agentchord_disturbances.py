@@ -9,7 +9,7 @@ condition on the seeds both AgentChord and the baseline solved.
 
 A campaign given later replaces an earlier one's record of the same trial (task/method/variant/condition/seed):
 chosen seeds re-run on a newer commit. `--run` runs (or resumes) `kintsugi bench <task> --methods agentchord --conditions <those the task has>` per task
-into <out>/<task>, then prints the tables. Fresh seeds (never used while developing) start at 40000.
+into <out>/<task>, then prints the tables; `--page PAGE [--name BLOCK]` also writes them into a benchmark page. Fresh seeds (never used while developing) start at 40000.
 """
 
 from __future__ import annotations
@@ -111,6 +111,8 @@ def main() -> None:
     ap.add_argument("--base-seed", type=int, default=40000)
     ap.add_argument("--workers", type=int, default=1)
     ap.add_argument("--out", type=Path, default=Path("runs/disturbances"))
+    ap.add_argument("--page", help="also write the tables into this benchmark page (with --name)")
+    ap.add_argument("--name", default="bench_agentchord_disturbances", help="the page's block name")
     a = ap.parse_args()
     dirs = list(a.campaigns)
     if a.run:
@@ -124,6 +126,11 @@ def main() -> None:
     paired = paired_rows(by_cell)
     if paired:
         print("\nPaired episode steps (seeds both solved):\n" + "\n".join(paired))
+    if a.page:
+        from bench.pages import Block, command_line, write_block
+
+        lines = [*disturbance_rows(by_cell), *(["", "Paired episode steps (seeds both solved):", "", *paired] if paired else [])]
+        print(f"page: {write_block(a.page, Block(a.name, command_line(), lines))}")
 
 
 if __name__ == "__main__":
