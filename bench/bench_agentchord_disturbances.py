@@ -9,7 +9,8 @@ condition on the seeds both AgentChord and the baseline solved.
 
 A campaign given later replaces an earlier one's record of the same trial (task/method/variant/condition/seed):
 chosen seeds re-run on a newer commit. `--run` runs (or resumes) `kintsugi bench <task> --methods agentchord --conditions <those the task has>` per task
-into <out>/<task>, then prints the tables; `--page PAGE [--name BLOCK]` also writes them into a benchmark page. Fresh seeds (never used while developing) start at 40000.
+into <out>/<task>, then prints the tables; `--page PAGE [--name BLOCK]` also writes them into a benchmark page. `--base-seed` defaults to 40000; that block has been looked at while
+developing, so figures meant for unseen seeds take a block no run has used (the benchmark page names them).
 """
 
 from __future__ import annotations
