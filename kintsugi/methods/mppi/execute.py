@@ -16,7 +16,7 @@ import numpy as np
 from kintsugi.control import MPPI, MPPIConfig
 from kintsugi.worlds.contact.config import ContactConfig
 from kintsugi.methods.mppi.costs import View
-from kintsugi.methods.mppi.fsm import Stage, StageFactory, StageMachine, Transition
+from kintsugi.methods.mppi.fsm import Guard, Stage, StageFactory, StageMachine, Transition
 from kintsugi.worlds.contact.plot import PlanSeries
 from kintsugi.worlds.contact.robot import ContactRobot, Observation
 from kintsugi.worlds.contact.scene import ACTUATORS
@@ -50,6 +50,8 @@ class AttemptResult:
     """The machine ran through every stage (the method's own verdict, not the ground truth)."""
     stages: list[Transition]
     obs: Observation
+    broken: str | None = None
+    """Why a path constraint (a guard) failed the attempt, if one did."""
 
 
 def mppi_config(cfg: ContactConfig, seed: int) -> MPPIConfig:
@@ -81,8 +83,9 @@ class StagedPlanner:
         assert self._stage is not None and self._obs is not None
         return self._stage.cost(View(batch, self.planning.layout, self._obs))
 
-    def run(self, robot: ContactRobot, factories: list[StageFactory], budget_s: float, log: TrialLog) -> AttemptResult:
-        machine = StageMachine(factories)
+    def run(self, robot: ContactRobot, factories: list[StageFactory], budget_s: float, log: TrialLog,
+            guards: tuple[Guard, ...] = ()) -> AttemptResult:
+        machine = StageMachine(factories, guards)
         period = 1.0 / self.cfg.control.rate_hz
         obs = robot.observe()
         t_end = obs.t + budget_s
@@ -102,10 +105,10 @@ class StagedPlanner:
             self.mppi.step(data)
             self._record(stage, obs)
             obs = robot.act(self.mppi.action_at, min(period, t_end - obs.t), feedback=stage.feedback,
-                            on_tick=machine.watch if stage.hold_s > 0 else None)
+                            on_tick=machine.watch if stage.hold_s > 0 or guards else None)
         machine.close(obs)
         self._report(machine, log)
-        return AttemptResult(reached=machine.succeeded, stages=list(machine.history), obs=obs)
+        return AttemptResult(reached=machine.succeeded, stages=list(machine.history), obs=obs, broken=machine.broken)
 
     def _enter(self, stage: Stage, obs: Observation, log: TrialLog) -> None:
         self._stage = stage
@@ -137,8 +140,10 @@ class StagedPlanner:
         for tr in machine.history[len(log.skills) - self._skills0:]:
             log.skill(SkillLog(skill=tr.stage, goal={k: round(v, 4) for k, v in tr.goal.items()},
                                terminal={a: round(float(v) * 1000, 2) for a, v in zip("xyz", tr.ee[:3])},
-                               reached=tr.reached, timed_out=not tr.reached, sim_time=round(tr.t_exit, 4)))
-            log.event(tr.t_exit, "stage done" if tr.reached else "stage failed", tr.stage)
+                               reached=tr.reached, timed_out=not tr.reached and not tr.why, message=tr.why,
+                               sim_time=round(tr.t_exit, 4)))
+            log.event(tr.t_exit, "stage done" if tr.reached else "stage failed",
+                      f"{tr.stage}: {tr.why}" if tr.why else tr.stage)
 
 
 def _fmt(goal: dict[str, float]) -> str:
@@ -146,12 +151,13 @@ def _fmt(goal: dict[str, float]) -> str:
 
 
 def run_attempt(cfg: ContactConfig, robot: ContactRobot, planning: PlanningWorld, factories: list[StageFactory],
-                log: TrialLog, seed: int, budget_s: float | None = None) -> tuple[AttemptResult, PlanTrace]:
-    """Plan and act through `factories` until they finish or the attempt's time budget runs out."""
+                log: TrialLog, seed: int, budget_s: float | None = None,
+                guards: tuple[Guard, ...] = ()) -> tuple[AttemptResult, PlanTrace]:
+    """Plan and act through `factories` until they finish, a guard breaks or the attempt's time budget runs out."""
     planner = StagedPlanner(cfg, planning, seed, skills_before=len(log.skills), show=robot.show_plan,
                              stats=getattr(robot, "plan_stats", None))
     try:
-        result = planner.run(robot, factories, budget_s or cfg.control.episode_s, log)
+        result = planner.run(robot, factories, budget_s or cfg.control.episode_s, log, guards)
     finally:
         planner.close()
     return result, planner.trace

@@ -19,6 +19,8 @@ from kintsugi.worlds.contact.robot import Feedback, Observation
 
 CostFn = Callable[[View], np.ndarray]
 Done = Callable[[Observation], bool]
+Guard = Callable[[Observation], "str | None"]
+"""A path constraint over the whole attempt: None while it holds, else why it broke (the attempt fails there)."""
 
 
 @dataclass
@@ -58,13 +60,19 @@ class Transition:
     reached: bool
     goal: dict[str, float]
     ee: np.ndarray
+    why: str = ""
+    """Why a stage failed other than on its timeout (a broken path constraint)."""
 
 
 class StageMachine:
-    """Runs stage factories in order; `update` advances on measured transitions and timeouts."""
+    """Runs stage factories in order; `update` advances on measured transitions and timeouts. `guards` are
+    checked on every observation, the inner rate's included: one that breaks fails the running stage and the
+    attempt."""
 
-    def __init__(self, factories: list[StageFactory]) -> None:
+    def __init__(self, factories: list[StageFactory], guards: tuple[Guard, ...] = ()) -> None:
         self._factories = factories
+        self.guards = guards
+        self.broken: str | None = None
         self.index = -1
         self.stage: Stage | None = None
         self.entered = 0.0
@@ -79,6 +87,9 @@ class StageMachine:
             return False
         if self.stage is None:
             self._enter(0, obs)
+            self._check(obs)
+            return True
+        if self._check(obs):
             return True
         changed = False
         while self.stage is not None and self._met(obs):
@@ -101,14 +112,25 @@ class StageMachine:
             self.stage = None
 
     def watch(self, obs: Observation) -> None:
-        """An inner-rate observation between two updates: a stage with a hold restarts its hold timer when its
-        condition breaks at any tick, not only at the ticks the planner replans on."""
-        if self.stage is None or self.finished or self.stage.hold_s <= 0:
+        """An inner-rate observation between two updates: the guards are checked on it, and a stage with a hold
+        restarts its hold timer when its condition breaks at any tick, not only at the ticks the planner replans on."""
+        if self.stage is None or self.finished or self._check(obs) or self.stage.hold_s <= 0:
             return
         if not self.stage.done(obs):
             self._held_since = None
         elif self._held_since is None:
             self._held_since = obs.t
+
+    def _check(self, obs: Observation) -> bool:
+        """Whether a guard broke on `obs` (the running stage then fails with the reason)."""
+        for guard in self.guards:
+            why = guard(obs)
+            if why is not None:
+                self.broken = why
+                self._leave(obs, reached=False, why=why)
+                self.stage, self.finished, self.failed = None, True, True
+                return True
+        return False
 
     @property
     def succeeded(self) -> bool:
@@ -129,7 +151,7 @@ class StageMachine:
         self.entered = obs.t
         self._held_since = None
 
-    def _leave(self, obs: Observation, reached: bool) -> None:
+    def _leave(self, obs: Observation, reached: bool, why: str = "") -> None:
         assert self.stage is not None
         self.history.append(Transition(stage=self.stage.name, t_enter=self.entered, t_exit=obs.t, reached=reached,
-                                       goal=dict(self.stage.goal), ee=obs.ee.copy()))
+                                       goal=dict(self.stage.goal), ee=obs.ee.copy(), why=why))
