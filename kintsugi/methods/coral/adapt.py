@@ -100,6 +100,9 @@ def embedded_adaptation(req: AdaptRequest) -> AdaptReply:
     outcome = next((x for x in last.stages if x.name == failed), None)
     if last.cost_error:
         why.append(f"The cost code failed in the loop ({last.cost_error[:120]}); written again from the library.")
+    elif last.broken:
+        why.append(f"The attempt broke what the instruction forbids ({last.broken[:160]}); the cost is kept and the "
+                   "attempt runs again.")
     elif failed is None:
         why.append("Every stage finished but the task was not judged done; the cost is kept, timeouts extended.")
         _scale(knobs, "timeout_scale", 1.25, notes)

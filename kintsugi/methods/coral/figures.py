@@ -21,8 +21,11 @@ class CoralAttempt(StrictModel):
     regions: list[dict[str, Any]]
     knobs: dict[str, Any]
     reached: bool = False
-    """The attempt's own verdict: its last stage's done condition held."""
+    """The attempt's own verdict: its last stage's done condition held and no constraint of the path broke."""
     cost_error: str | None = None
+    broken: str | None = None
+    """Why a constraint the instruction sets over the whole path failed the attempt (a thing it forbids touching
+    came too close), if one did."""
     code_ms_per_step: float | None = None
     """Wall-clock cost of the cost code per control step (varies between equal trials)."""
     mppi_ms_per_step: float | None = None

@@ -94,6 +94,7 @@ class Coral:
     def __init__(self, ctx: Any, variant: Variant) -> None:
         self.ctx, self.variant = ctx, variant
         self.attempts: list[dict[str, Any]] = []
+        self._guards: tuple = ()
         self.info: dict[str, Any] = {"variant": variant.name}
         self._now = 0.0
         self._seed = 0
@@ -163,6 +164,7 @@ class Coral:
         return c.samples, max(1, round(c.horizon_s / self.ctx.cfg.sim.planning_timestep_s))
 
     def _run(self, robot: Any, log: TrialLog, reasoner: Any) -> bool:
+        from kintsugi.methods.coral.clearance import guards
         from kintsugi.methods.coral.types import PriorsRequest
         from kintsugi.methods.coral.formulate import ask_formulation
         from kintsugi.methods.coral.priors import ask_priors
@@ -199,6 +201,7 @@ class Coral:
                 log.event(obs.t, "formulation", "; ".join(notes))
         planning = PlanningWorld(cfg, ctx.known, {k: Physics(mass_kg=v.mass_kg, friction=v.friction)
                                                   for k, v in beliefs.items()})
+        self._guards = guards(req, ctx.known, cfg.perception.latency_s + 1.0 / cfg.perception.rate_hz)
         fitter = None
         attempts = self.variant.attempts or cfg.coral.max_attempts
         for attempt in range(attempts):
@@ -216,6 +219,7 @@ class Coral:
             self.clock["planning"] += planned
             self.clock["physics"] += max(0.0, time.perf_counter() - t_attempt - planned)
             record.update(reached=bool(result is not None and result.reached), cost_error=error,
+                          broken=result.broken if result is not None else None,
                           code_ms_per_step=round(1000 * timing.seconds / max(1, timing.calls), 3),
                           mppi_ms_per_step=round(1000 * float(np.mean(trace.iteration_s)), 2) if trace and trace.iteration_s else None)
             if result is not None and result.reached:
@@ -248,7 +252,8 @@ class Coral:
                                  first_env(robot.observe()))
         try:
             result, trace = run_attempt(self.ctx.cfg, robot, planning, factories, log,
-                                        seed=self._seed + 1000 * attempt)
+                                        seed=self._seed + 1000 * attempt,
+                                        guards=tuple(g.fresh() for g in self._guards))
         except CostCodeError as exc:
             log.event(robot.sim_time, "cost error", str(exc)[:300])
             return None, None, timing, str(exc)[:300]
@@ -311,7 +316,8 @@ class Coral:
         lost = any(a and not b for a, b in zip(held, held[1:])) and bool(held) and not held[-1]
         return AttemptHistory(attempt=attempt + 1, stages=stages, failed_stage=failed, max_force_n=round(max(forces), 3),
                               mean_press_force_n=press, object_travel_m=travel, object_tilt_deg=tilt,
-                              touch_lost_while_held=lost, cost_error=error)
+                              touch_lost_while_held=lost, cost_error=error,
+                              broken=result.broken if result is not None else None)
 
     def _adapt(self, reasoner: Any, req: Any, beliefs: dict, plan: Any, program: Any, history: Any, sysid: Any,
                planning: Any, samples: int, steps: int, log: TrialLog, record: dict) -> tuple[dict, Any, Any]:

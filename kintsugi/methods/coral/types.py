@@ -217,6 +217,9 @@ class AttemptHistory(StrictModel):
     object_tilt_deg: dict[str, float]
     touch_lost_while_held: bool = False
     cost_error: str | None = None
+    broken: str | None = Field(default=None, description="why the attempt failed a constraint the instruction "
+                                                         "sets over the whole path (e.g. a thing it forbids "
+                                                         "touching came too close); None = none broke")
 
 
 class AdaptRequest(StrictModel):
