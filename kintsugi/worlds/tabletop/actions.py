@@ -113,6 +113,20 @@ class Place(_Action):
     z_offset: float = Field(0.0, ge=0.0, le=0.3)
 
 
+class Push(_Action):
+    """Push `obj` across the table by `dxy` (world frame) with the closed hand: it comes down behind the object
+    (on the side away from where it is pushed), moves along `dxy` and rises. `contact_deg` says where the pads
+    meet that far side: 90 low beside it, less higher up, 0 on its top (pressing down on it and drawing it
+    along, for a far side beyond the arm's reach or the workspace). `pitch_deg` tilts the hand about its
+    closing axis (a hand leaning in reaches farther out)."""
+
+    action: Literal["push"] = "push"
+    obj: str
+    dxy: tuple[float, float]
+    contact_deg: float = Field(90.0, ge=0.0, le=90.0)
+    pitch_deg: float = Field(0.0, ge=-60.0, le=60.0)
+
+
 class Back(_Action):
     """Return the arm to its home configuration."""
 
@@ -123,7 +137,7 @@ class Back(_Action):
 
 
 ArmAction = Annotated[
-    Union[Grasp, OpenGripper, CloseGripper, MoveToObj, MoveToTarget, MoveByOffset, RotateEef, Place, Back],
+    Union[Grasp, OpenGripper, CloseGripper, MoveToObj, MoveToTarget, MoveByOffset, RotateEef, Place, Push, Back],
     Field(discriminator="action"),
 ]
 
@@ -152,7 +166,7 @@ class Drive(StrictModel):
 
 Action = Annotated[Union[ArmAction, Drive], Field(discriminator="action")]
 ACTION_NAMES = ("grasp", "open_gripper", "close_gripper", "move_to_obj", "move_to_target", "move_by_offset",
-                "rotate_eef", "place", "back", "drive")
+                "rotate_eef", "place", "push", "back", "drive")
 _ADAPTER: TypeAdapter = TypeAdapter(Action)
 
 

@@ -24,6 +24,7 @@ from kintsugi.worlds.tabletop.config import TabletopConfig
 from kintsugi.worlds.tabletop.ik import ArmIK
 from kintsugi.worlds.tabletop.motion import Grip, Move, Step
 from kintsugi.worlds.tabletop.objects import Shape
+from kintsugi.worlds.tabletop.pushing import push_program
 
 LINEAR_STEP_M = 0.015
 LINEAR_STEP_RAD = math.radians(10.0)
@@ -288,6 +289,9 @@ class Planner:
             self._linear(a.arm, (pre, rot), (c, rot), q_pre, f"the grasp pose of {a.obj}", f"approach {a.obj}"),
             Grip(True, "close", ramp_s=a.close_s),
         ]
+
+    def _push(self, a: A.Push, arm: ArmView, feats: dict) -> list[Step]:
+        return push_program(self, a, arm, feats)
 
     def _sweep_gap(self, arm: str, q0: np.ndarray, q1: np.ndarray, objs: list[ObjectFeatures]) -> float:
         """The least clearance of the open hand to the objects along the joint-space line from q0 to q1."""

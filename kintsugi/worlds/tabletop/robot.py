@@ -30,7 +30,7 @@ from kintsugi.worlds.tabletop.scene import CAMERAS
 from kintsugi.worlds.tabletop.world import TabletopWorld
 
 Vec3 = tuple[float, float, float]
-NEEDS_FEATURES = ("grasp", "move_to_obj", "place")
+NEEDS_FEATURES = ("grasp", "move_to_obj", "place", "push")
 
 
 class ArmState(StrictModel):
@@ -207,7 +207,7 @@ class TabletopRobot:
         feats = None
         if any(p.action in NEEDS_FEATURES for p in parts):  # perceive only what the action refers to
             needed = {o for p in parts for o in p.objects}
-            if any(p.action == "grasp" for p in parts):  # its way in must clear every object, not just its own
+            if any(p.action in ("grasp", "push") for p in parts):  # its way in must clear every object
                 needed |= set(self.objects)
             needed |= {k for p in parts if p.action == "place" for k in self._world.pad_contacts(p.arm)[0]}
             feats = self._perception.features(needed)
