@@ -34,6 +34,7 @@ from kintsugi.methods.agentchord.conducting import ConductorConfig, ConductorErr
 from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes
 from kintsugi.methods.agentchord.observe import ARMS, features
 from kintsugi.methods.agentchord.pouring import Pouring
+from kintsugi.methods.agentchord.pushing import Pushing
 from kintsugi.methods.agentchord.reaching import Reaching, Unreachable
 from kintsugi.methods.agentchord.recovering import Recovering
 from kintsugi.methods.agentchord.settling import SETTLE_TRIES, Settling
@@ -63,7 +64,7 @@ def strict(constraints: Any) -> list:
             for c in constraints]
 
 
-class Conductor(Recovering, Settling, Reaching, Pouring):
+class Conductor(Recovering, Settling, Reaching, Pushing, Pouring):
     """Runs one compiled graph to its goal: nominal edges under their monitors, recoveries (`Recovering`) after
     a firing, settles (`Settling`) before a recovery or the goal check reads the scene."""
 

@@ -10,6 +10,7 @@ conductor then ends the trial as a recorded failure with the reason, or re-plans
   (re-grasped where it lies, at the part of it the arm reaches);
 - a grasp of a standing object: the side approach turns about the vertical (the default approach, away from
   the base, runs out of reach near the robot or far out);
+- an object no arm of the plan grasps where it lies: pushed back into reach first (`Pushing`);
 - a place whose spot cannot be reached: the nearest clear spots around it, within the tolerance of the node it
   leads to when that node says where the object must be, else up to `FREE_PLACE_M` away.
 """
@@ -192,6 +193,12 @@ class Reaching:
             f = self.robot.features({call["obj"]}).get(call["obj"])
             for alt in [call, *grasp_alternatives(call, f, np.asarray(self.robot.bases[arm], float))]:
                 if self.feasible(alt):
+                    return self.robot.execute(alt), alt
+        if name == "grasp" and f is not None and f.centroid is not None and not any(
+                self.grasp_reachable(call, a) for a in sorted(self.arms) if a in ("left", "right") and a != arm):
+            if self.push_into_reach(edge, call):  # no arm grasps it where it lies: pushed back into reach
+                alt = self.grasp_reachable(call, arm)
+                if alt is not None:
                     return self.robot.execute(alt), alt
         if options:
             self.log.event(self.robot.sim_time, "unreachable", f"{edge.id} {name}: none of {len(options)} other "
