@@ -30,6 +30,9 @@ is a camera frame's, up to `perception.latency_s` + one frame period old, and th
 push-around (seed 2, 1026 inner ticks, `bench/bench_coral_clearance.py`) the tracked box was up to 27 mm from the
 true one, and never more than 2.4 mm beyond the path the hand travelled over that age (0.7 mm at rest)."""
 
+REACH_M = 0.03
+"""A hand farther than this from an object's tracked box is not pushing it: its path then moves nothing unseen."""
+
 _CORNERS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
 
 
@@ -100,8 +103,9 @@ def gap(a: Prism, b: Prism) -> float:
 class KeepClear:
     """The constraint: None while every moved object keeps clear of everything to avoid, else why it broke.
 
-    The margin per tracked party is `margin_m` plus the length of the hand's path over the last `age_s` (how far
-    a pushed object can have gone since the frame its pose is from). One instance per attempt (`fresh`)."""
+    The margin per tracked party is `margin_m` plus the length of the hand's path over the last `age_s` while it
+    was within reach of a moved object (how far a pushed object can have gone since the frame its pose is from).
+    One instance per attempt (`fresh`)."""
 
     def __init__(self, known: Scene, movers: list[str], fixtures: list[str], objects: list[str],
                  margin_m: float = MARGIN_M, age_s: float = 0.15) -> None:
@@ -121,20 +125,24 @@ class KeepClear:
         """The same constraint with no hand path yet (a new attempt: the scene was reset)."""
         return KeepClear(self.known, self.movers, list(self.fixtures), self.objects, self.margin, self.age)
 
-    def _unseen_m(self, obs: Observation) -> float:
-        """The hand's path over the last `age_s`."""
-        self._hand.append((obs.t, np.asarray(obs.ee[:3], dtype=float).copy()))
+    def _unseen_m(self, obs: Observation, moved: list[Prism]) -> float:
+        """The hand's path over the last `age_s`, counted where it was within `REACH_M` of a moved object."""
+        tip = np.asarray(obs.ee[:3], dtype=float).copy()
+        point = Prism(tip[None, :2], float(tip[2]), float(tip[2]))
+        near = any(gap(point, p) <= REACH_M for p in moved)
+        self._hand.append((obs.t, tip, near))
         while len(self._hand) > 2 and self._hand[1][0] <= obs.t - self.age:
             self._hand.popleft()
-        pts = np.array([p for _, p in self._hand])
-        return float(np.sum(np.linalg.norm(np.diff(pts, axis=0), axis=1))) if len(pts) > 1 else 0.0
+        h = list(self._hand)
+        return float(sum(np.linalg.norm(b[1] - a[1]) for a, b in zip(h, h[1:]) if a[2] or b[2]))
 
     def __call__(self, obs: Observation) -> str | None:
-        per = self.margin + self._unseen_m(obs)
+        moved = {m: self._prisms(obs, m) for m in self.movers}
+        per = self.margin + self._unseen_m(obs, [p for ps in moved.values() for p in ps])
         others = [(f, p, 1) for f, p in self.fixtures.items()]
         others += [(n, p, 2) for n in self.objects for p in self._prisms(obs, n)]
-        for m in self.movers:
-            for part in self._prisms(obs, m):
+        for m, parts in moved.items():
+            for part in parts:
                 for name, other, tracked in others:
                     d, margin = gap(part, other), per * tracked
                     if d < margin:

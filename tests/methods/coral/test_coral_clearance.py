@@ -119,3 +119,20 @@ def test_an_object_to_avoid_is_kept_clear_by_its_tracked_box_with_a_margin_for_e
     apart = 0.07 + 2 * MARGIN_M
     assert keep(_obs(0.0, {"blue_box": (0.03, 0.0, 0.0), "red_box": (0.03, apart + 1e-4, 0.0)})) is None
     assert "blue_box came within" in keep(_obs(0.0, {"blue_box": (0.03, 0.0, 0.0), "red_box": (0.03, apart - 1e-4, 0.0)}))
+
+
+def test_the_margin_grows_by_the_path_of_a_hand_within_reach_over_a_tracked_poses_age_and_afresh_per_attempt() -> None:
+    keep = keep_clear(scene_request("around", AROUND), SCENE, age_s=0.15)
+    at = (0.1, 0.02 + BOX_HALF[1] + MARGIN_M + 0.004, 0.0)  # 4 mm beyond the margin of a still hand
+    for i, x in enumerate((0.05, 0.055, 0.06)):  # the hand behind the box pushed 10 mm in 0.1 s: it may be there
+        obs = _obs(0.05 * i, {"box": at})
+        obs.ee[:3] = (x, at[1], 0.01)
+        why = keep(obs)
+    assert why is not None and "kept 13 mm clear" in why
+    again = keep.fresh()
+    assert again(_obs(0.1, {"box": at})) is None
+    far = keep.fresh()
+    for i, x in enumerate((-0.15, -0.1, -0.05)):  # the hand flying in from home, far from the box, moves nothing
+        obs = _obs(0.05 * i, {"box": at})
+        obs.ee[:3] = (x, 0.0, 0.15)
+        assert far(obs) is None
