@@ -3,9 +3,9 @@
 Runs coral push-around trials (perceived poses, the default) and at every inner tick compares the box the robot
 tracks with the simulator's: how far either box's corners reach outside the other (their Hausdorff distance, a
 bound on how much any gap measured from the tracked box can be off; a box turned by a symmetry is no error), how
-far beyond the hand's path over the last `--age` seconds that reaches (coral's margin is 3 mm beyond it), and the
-gap to the post measured on each. Prints the percentiles, the smallest
-tracked gap while the true box touched the post, and each trial's outcome.
+far beyond the hand's path over the last `--age` seconds within reach of the box that reaches (coral's margin is
+3 mm beyond it), and the gap to the post measured on each. Prints the percentiles, the smallest tracked gap
+while the true box touched the post, and each trial's outcome.
 
     MUJOCO_GL=egl .venv/bin/python bench/bench_coral_clearance.py --seeds 2
 """
@@ -23,7 +23,7 @@ import numpy as np  # noqa: E402
 from kintsugi.core.plugins import load_builtins  # noqa: E402
 from kintsugi.core.record import TrialSpec  # noqa: E402
 from kintsugi.core.runner import run_trial  # noqa: E402
-from kintsugi.methods.coral.clearance import _CORNERS, box_prism, fixture_prism, gap  # noqa: E402
+from kintsugi.methods.coral.clearance import _CORNERS, REACH_M, Prism, box_prism, fixture_prism, gap  # noqa: E402
 from kintsugi.worlds.contact.world import rotate  # noqa: E402
 
 
@@ -37,7 +37,7 @@ def _reach(pos_a: np.ndarray, quat_a: np.ndarray, pos_b: np.ndarray, quat_b: np.
 
 def measure(seed: int, method: str, overrides: dict, age_s: float) -> tuple[dict, list[tuple]]:
     rows: list[tuple] = []
-    hand: list[tuple[float, np.ndarray]] = []
+    hand: list[tuple[float, np.ndarray, bool]] = []
 
     def attach(robot, log) -> None:  # noqa: ANN001
         world, observe = robot._world, robot.observe
@@ -50,9 +50,11 @@ def measure(seed: int, method: str, overrides: dict, age_s: float) -> tuple[dict
             seen = obs.objects["box"]
             pos, quat = world.object_pose("box")
             err = max(_reach(seen.pos, seen.quat, pos, quat, half), _reach(pos, quat, seen.pos, seen.quat, half))
-            hand.append((obs.t, obs.ee[:3].copy()))
-            pts = np.array([p for t, p in hand if t >= obs.t - age_s - 1e-9])
-            path = float(np.sum(np.linalg.norm(np.diff(pts, axis=0), axis=1))) if len(pts) > 1 else 0.0
+            tip = obs.ee[:3].copy()
+            near = gap(Prism(tip[None, :2], float(tip[2]), float(tip[2])), box_prism(seen.pos, seen.quat, half)) <= REACH_M
+            hand.append((obs.t, tip, near))
+            h = [x for x in hand if x[0] >= obs.t - age_s - 1e-9]
+            path = float(sum(np.linalg.norm(b[1] - a[1]) for a, b in zip(h, h[1:]) if a[2] or b[2]))
             rows.append((err, gap(box_prism(seen.pos, seen.quat, half), post), gap(box_prism(pos, quat, half), post),
                          world.in_contact("box", "post"), err - path))
             return obs
