@@ -51,8 +51,9 @@ def measure(seed: int, method: str, overrides: dict, age_s: float) -> tuple[dict
             pos, quat = world.object_pose("box")
             err = max(_reach(seen.pos, seen.quat, pos, quat, half), _reach(pos, quat, seen.pos, seen.quat, half))
             tip = obs.ee[:3].copy()
-            near = gap(Prism(tip[None, :2], float(tip[2]), float(tip[2])), box_prism(seen.pos, seen.quat, half)) <= REACH_M
-            hand.append((obs.t, tip, near))
+            box = box_prism(seen.pos, seen.quat, half)
+            near = gap(Prism(tip[None, :2], float(tip[2]), float(tip[2])), box) <= REACH_M and tip[2] < box.z_hi
+            hand.append((obs.t, tip[:2], near))
             h = [x for x in hand if x[0] >= obs.t - age_s - 1e-9]
             path = float(sum(np.linalg.norm(b[1] - a[1]) for a, b in zip(h, h[1:]) if a[2] or b[2]))
             rows.append((err, gap(box_prism(seen.pos, seen.quat, half), post), gap(box_prism(pos, quat, half), post),

@@ -28,11 +28,13 @@ MARGIN_M = 0.003
 """How close a tracked box may come to a thing to avoid beyond how far it can have moved unseen, m. A tracked pose
 is a camera frame's, up to `perception.latency_s` + one frame period old, and the box moves while it is pushed: on
 push-around (seed 2, 1026 inner ticks, `bench/bench_coral_clearance.py`) the tracked box was up to 27 mm from the
-true one, and never more than 2.1 mm beyond the path the hand travelled within `REACH_M` of it over that age (0.7 mm
+true one, and never more than 2.4 mm beyond the path the hand travelled on the table within `REACH_M` of it and below
+its top over that age (0.7 mm
 at rest)."""
 
 REACH_M = 0.03
-"""A hand farther than this from an object's tracked box is not pushing it: its path then moves nothing unseen."""
+"""A hand farther than this from an object's tracked box, or above it, is not pushing it: its path then moves
+nothing unseen."""
 
 _CORNERS = np.array([[sx, sy, sz] for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 1)], dtype=float)
 
@@ -104,8 +106,8 @@ def gap(a: Prism, b: Prism) -> float:
 class KeepClear:
     """The constraint: None while every moved object keeps clear of everything to avoid, else why it broke.
 
-    The margin per tracked party is `margin_m` plus the length of the hand's path over the last `age_s` while it
-    was within reach of a moved object (how far a pushed object can have gone since the frame its pose is from).
+    The margin per tracked party is `margin_m` plus the length of the hand's path on the table over the last
+    `age_s` while it could push a moved object (how far a pushed object can have gone since the frame its pose is from).
     One instance per attempt (`fresh`)."""
 
     def __init__(self, known: Scene, movers: list[str], fixtures: list[str], objects: list[str],
@@ -127,11 +129,12 @@ class KeepClear:
         return KeepClear(self.known, self.movers, list(self.fixtures), self.objects, self.margin, self.age)
 
     def _unseen_m(self, obs: Observation, moved: list[Prism]) -> float:
-        """The hand's path over the last `age_s`, counted where it was within `REACH_M` of a moved object."""
+        """The hand's path on the table over the last `age_s`, counted where its fingertips were below a moved
+        object's top and within `REACH_M` of it (where they can push it)."""
         tip = np.asarray(obs.ee[:3], dtype=float).copy()
         point = Prism(tip[None, :2], float(tip[2]), float(tip[2]))
-        near = any(gap(point, p) <= REACH_M for p in moved)
-        self._hand.append((obs.t, tip, near))
+        near = any(gap(point, p) <= REACH_M and tip[2] < p.z_hi for p in moved)
+        self._hand.append((obs.t, tip[:2], near))
         while len(self._hand) > 2 and self._hand[1][0] <= obs.t - self.age:
             self._hand.popleft()
         h = list(self._hand)
