@@ -104,14 +104,15 @@ def tilt_deg(axis, gravity: Vec3) -> float:
 
 def top_tilt_deg(obj: object, gravity: Vec3) -> float:
     """The object's tilt from standing: sign-free (0-90 degrees), or from its top (0-180) when the top is known,
-    by a seen cap, the robot's tracked top or a container's opening; one whose top is below its centre reads
-    180 - the axis's tilt."""
+    by a seen cap, a container's seen opening or the robot's tracked top, in that order (what the cameras see
+    of an end beats the robot's inference from its encoders: a lying cup's top is a guess that a stand-up can
+    get wrong); one whose top is below its centre reads 180 - the axis's tilt."""
     tilt = tilt_deg(getattr(obj, "axis", None), gravity)
     top, centre = vector_feature(obj, "cap"), vector_feature(obj, "centroid")
-    if top is None:
-        top = vector_feature(obj, "tracked_top")
     if top is None:  # a container's open end is its top
         top = vector_feature(obj, "opening")
+    if top is None:
+        top = vector_feature(obj, "tracked_top")
     if top is not None and centre is not None and dot(top, gravity) > dot(centre, gravity):
         tilt = 180.0 - tilt
     return tilt

@@ -1,8 +1,9 @@
 """The robot's tracked top in the checks: a bottle that fell mouth-first into the cup stands on its head with
 its cap hidden, so the cameras alone read it upright (pour-single seed 49 was a false success). The conductor
 knows which end is its top (`Tops`: encoders while held, continuity while falling) and hands that to the
-checks as extreme `tracked_top`; `upright` and `tilted` then measure the tilt from the top. A seen cap still
-wins over the tracked top."""
+checks as extreme `tracked_top`; `upright` and `tilted` then measure the tilt from the top. A seen cap, or a
+container's seen opening, still wins over the tracked top: a cup stood up the wrong way round after it was knocked
+over keeps a tracked top pointing up (pour-single under `all`, a false success)."""
 
 from __future__ import annotations
 
@@ -77,3 +78,27 @@ def test_no_axis_or_no_estimate_adds_nothing(on_its_head) -> None:
     assert with_tracked_top(hidden, None) is hidden
     axisless = hidden.model_copy(update={"axis": None})
     assert with_tracked_top(axisless, DOWN) is axisless
+
+
+@pytest.fixture(scope="module")
+def cup_on_its_rim():  # noqa: ANN201
+    """Perceived features of a cup standing upside down (its opening on the table)."""
+    world = TabletopWorld(TabletopConfig(), ["cup"], {"cup": StartPose(x=0.46, y=-0.03)})
+    m, d = world.model, world.data
+    adr = m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, "cup")]
+    q = Rotation.from_euler("x", 180.0, degrees=True).as_quat()
+    d.qpos[adr:adr + 3] = [0.46, -0.03, d.qpos[adr + 2]]
+    d.qpos[adr + 3:adr + 7] = [q[3], q[0], q[1], q[2]]
+    mujoco.mj_forward(m, d)
+    seen = TabletopRobot(world).observation(images=False).objects["cup"]
+    world.close()
+    return seen
+
+
+def test_a_seen_opening_wins_over_a_tracked_top_that_points_up(cup_on_its_rim) -> None:
+    seen = cup_on_its_rim
+    assert "opening" in seen.extremes and seen.extremes["opening"][2] < seen.centroid[2]
+    fooled = with_tracked_top(seen, UP)
+    assert "tracked_top" in fooled.extremes and fooled.extremes["tracked_top"][2] > seen.centroid[2]
+    upright = Upright(object="cup", tol_deg=8).evaluate(Features(objects={"cup": fooled}))
+    assert upright > 90.0  # on its rim, whatever the robot believed of its top
