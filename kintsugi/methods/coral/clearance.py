@@ -28,9 +28,8 @@ MARGIN_M = 0.003
 """How close a tracked box may come to a thing to avoid beyond how far it can have moved unseen, m. A tracked pose
 is a camera frame's, up to `perception.latency_s` + one frame period old, and the box moves while it is pushed: on
 push-around (seed 2, 1026 inner ticks, `bench/bench_coral_clearance.py`) the tracked box was up to 27 mm from the
-true one, and never more than 2.4 mm beyond the path the hand travelled on the table within `REACH_M` of it and below
-its top over that age (0.7 mm
-at rest)."""
+true one, and never more than 2.4 mm beyond the path the hand travelled on the table within `REACH_M` of it and
+below its top over that age (0.7 mm at rest)."""
 
 REACH_M = 0.03
 """A hand farther than this from an object's tracked box, or above it, is not pushing it: its path then moves
