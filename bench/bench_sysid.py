@@ -49,7 +49,7 @@ CONVERGED = 0.05
 
 def coral_prior(ctx) -> dict:  # noqa: ANN001 - a ContactContext
     """The physics-priors role's guess, from the labels and known sizes only (as coral asks it)."""
-    from kintsugi.methods.coral.method import object_views
+    from kintsugi.methods.coral.views import object_views
     from kintsugi.reasoning import make_reasoner
     from kintsugi.methods.coral.types import PriorsRequest
     from kintsugi.methods.coral.priors import ask_priors

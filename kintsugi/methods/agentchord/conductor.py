@@ -1,8 +1,7 @@
 """The conductor: runs a compiled recovery-augmented graph on the tabletop robot, with no reasoning calls.
 
-From the start node it takes the cheapest nominal edge to the goal (`next_edge`), runs its atomic actions
-(a `move_to_obj` goes to its keyframe, re-solved with the latest features just before it runs, warm-started
-from the compiled one), and evaluates the edge's monitors (Eq. 12).
+From the start node it takes the cheapest nominal edge to the goal (`next_edge`), runs its atomic actions (a
+`move_to_obj` goes to its keyframe, re-solved from the latest features as it runs) and its monitors (Eq. 12).
 
 Two sampling rates, by what a monitor reads:
 - proprioceptive monitors (gripper opening, finger-pad touch: a drop, a missed grasp) are evaluated every
@@ -15,9 +14,9 @@ Two sampling rates, by what a monitor reads:
 A recovery's chain runs to its merge node; the failed edge's monitors are read once more there (a recovery
 that did not hold is run again; after MERGE_FAILS such failures on one edge the conductor falls back to re-planning
 from the current observation, at most `max_replans` times), and nominal execution continues. An action the arm
-cannot carry out is tried other ways (`Reaching`), else the trial ends as a recorded failure; a pour sub-goal is
-judged from perception (`Pouring`). Recovery latency is
-measured in control steps from the firing to the recovery's first command (`Metrics.recovery_latency_steps`).
+cannot carry out is tried other ways (`Reaching`; an object out of every grasp is pushed back into reach,
+`Pushing`), else the trial ends as a recorded failure; a pour sub-goal is judged from perception (`Pouring`).
+Recovery latency is counted in control steps from the firing to the recovery's first command (`Metrics`).
 """
 
 from __future__ import annotations

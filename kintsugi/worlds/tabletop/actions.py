@@ -22,6 +22,17 @@ Arm = Literal["left", "right"]
 Vec3 = tuple[float, float, float]
 
 
+
+class PlanError(KintsugiError):
+    """An action cannot be carried out (unreachable pose, object not visible); nothing moved."""
+
+    def __init__(self, message: str, ik_failed: bool = False, clipped: bool = False, unseen: bool = False) -> None:
+        super().__init__(message)
+        self.ik_failed = ik_failed
+        self.clipped = clipped
+        self.unseen = unseen
+
+
 class ActionError(KintsugiError):
     """An action call is malformed (name, argument, object): nothing was executed."""
 

@@ -15,9 +15,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial.transform import Rotation, Slerp
 
-from kintsugi.core.errors import KintsugiError
 from kintsugi.perception.features import ObjectFeatures
 from kintsugi.worlds.tabletop import actions as A
+from kintsugi.worlds.tabletop.actions import PlanError
 from kintsugi.worlds.tabletop.arm_model import PAD_HALF
 from kintsugi.worlds.tabletop.clearance import gap, top_z
 from kintsugi.worlds.tabletop.config import TabletopConfig
@@ -58,16 +58,6 @@ PALM_BACK_M = 0.035
 """The open hand, as points about the tool centre: the pads' tips and roots either side, and the palm behind."""
 
 AXES = {"normal": 0, "closing": 1, "approach": 2}
-
-
-class PlanError(KintsugiError):
-    """An action cannot be carried out (unreachable pose, object not visible); nothing moved."""
-
-    def __init__(self, message: str, ik_failed: bool = False, clipped: bool = False, unseen: bool = False) -> None:
-        super().__init__(message)
-        self.ik_failed = ik_failed
-        self.clipped = clipped
-        self.unseen = unseen
 
 
 @dataclass

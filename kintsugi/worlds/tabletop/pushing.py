@@ -69,20 +69,18 @@ def push_program(planner: Any, a: A.Push, arm: Any, feats: dict) -> list[Step]:
     """Close the hand, come down behind the object (from above it, clear of the rest), move along `dxy` (and
     the starting clearance), rise. Raises the planner's PlanError when a pose is out of reach or the hand
     holds something (it cannot push with an object in it)."""
-    from kintsugi.worlds.tabletop.planning import PlanError
-
     held = [k for k, n in arm.touching.items() if n == 2]
     if held:
-        raise PlanError(f"the {a.arm} hand holds {held[0]}: it cannot push", ik_failed=False)
+        raise A.PlanError(f"the {a.arm} hand holds {held[0]}: it cannot push", ik_failed=False)
     f = planner._visible(a.obj, feats.get(a.obj))
     d = np.asarray(a.dxy, float)
     dist = float(np.linalg.norm(d))
     if dist < 1e-4:
-        raise PlanError("a push needs a direction (dxy is zero)")
+        raise A.PlanError("a push needs a direction (dxy is zero)")
     u = d / dist
     travel = dist + (START_CLEAR_M if a.contact_deg >= 90.0 - 1e-9 else 0.0)
     what = f"{a.obj} from behind"
-    tried: PlanError | None = None
+    tried: A.PlanError | None = None
     for flip in (0.0, 180.0):  # the closed hand is the same either way round; the wrist's limits are not
         rot = push_rotation(u, a.pitch_deg, flip)
         start = contact_tip(f, u, a.contact_deg) - PAD_HALF[2] * rot[:, 2]  # the tool centre: half a pad up
@@ -93,7 +91,7 @@ def push_program(planner: Any, a: A.Push, arm: Any, feats: dict) -> list[Step]:
             try:
                 q_hover = planner._solve(a.arm, hover, rot, arm.q, f"the pose above {what}")
                 break
-            except PlanError as exc:
+            except A.PlanError as exc:
                 tried = exc
         else:
             continue

@@ -31,7 +31,7 @@ def _formulation(task: str) -> dict:
     ctx = ep.context(frozenset({"system-c"}), ReasonerSettings(), 0)
     coral = Coral(ctx, VARIANTS["coral"])
     from kintsugi.methods.coral.priors import embedded_priors
-    from kintsugi.methods.coral.method import object_views
+    from kintsugi.methods.coral.views import object_views
     from kintsugi.methods.coral.types import PriorsRequest
 
     priors = embedded_priors(PriorsRequest(task=ctx.task_text, objects=object_views(ctx.known))).objects
