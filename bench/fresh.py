@@ -109,9 +109,9 @@ def page_cells(page: str, heading: str) -> dict[tuple, Figure]:
     steps_col = next((i for i, h in enumerate(header) if h == "steps"), None)
     if col["method"] is None and rate_col is None and col["task"] is not None:
         return _wide_cells(rows, header, col["task"])
-    if col["method"] is None or rate_col is None:
-        raise SystemExit(f"{page}: the table under {heading!r} needs a method column and a `G %` or `success %` one, "
-                         "or a task column and one column per method")
+    if (col["method"] is None and col["task"] is None) or rate_col is None:
+        raise SystemExit(f"{page}: the table under {heading!r} needs a method or task column and a `G %` or "
+                         "`success %` one, or a task column and one column per method")
     out = {}
     for row in rows[2:]:
         m = _RATE.search(row[rate_col]) if rate_col < len(row) else None
