@@ -85,7 +85,9 @@ def _context() -> mp.context.BaseContext:
     """The forkserver, with this module preloaded in it: a child forked from a server that has numpy and the
     sandbox imported starts in milliseconds, where one that imports them itself takes about half a second
     (more where bytecode is not cached), twice per formulation. `__main__` stays preloaded as multiprocessing's
-    default has it. The list is set before the server starts (setting it later changes nothing)."""
+    default has it. The list is set before the server starts (setting it later changes nothing). Each child
+    still imports the parent's `__main__` script again (multiprocessing's rule for a script run by path), so a
+    script that probes keeps its top level light."""
     if "forkserver" not in mp.get_all_start_methods():
         return mp.get_context("spawn")
     ctx = mp.get_context("forkserver")
