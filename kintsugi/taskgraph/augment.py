@@ -23,9 +23,11 @@ class RecoveryProposal(GraphModel):
     """The nominal edge the failure may occur on; its source node is the failure context."""
     monitor: Monitor
     """`monitor.recovery` names the first recovery edge (leaving the failure context)."""
-    nodes: Annotated[tuple[Node, ...], Field(max_length=16)] = ()
-    """New recovery nodes; leave empty to merge straight into an existing nominal node."""
-    edges: Annotated[tuple[Edge, ...], Field(max_length=24)] = ()
+    nodes: Annotated[tuple[Node, ...], Field(max_length=32)] = ()
+    """New recovery nodes; leave empty to merge straight into an existing nominal node. A branch that first
+    sees how a fallen object lies has one chain per outcome (standing, lying, ...), each up to a full
+    re-grasp-and-carry, so a bound of 16 was met by real re-plans."""
+    edges: Annotated[tuple[Edge, ...], Field(max_length=48)] = ()
 
 
 def parse_proposals(data: object) -> list[RecoveryProposal]:

@@ -195,10 +195,12 @@ def embedded_arrange(request: ArrangerRequest) -> ArrangerReply:
             v = facts[edge.target]
             for arm, obj in _candidates(mode, edge, u, v):
                 try:
-                    proposals.append(_branch(request, graph, edge, mode, arm, obj, u, facts, ops, ctg, seen, where,
-                                             releases=("holding", arm, obj) not in v))
-                except PlanningError as exc:
-                    notes.append(f"{edge.id} {mode.name}({arm}, {obj}): no recovery ({exc})")
+                    branch = _branch(request, graph, edge, mode, arm, obj, u, facts, ops, ctg, seen, where,
+                                     releases=("holding", arm, obj) not in v)
+                    parse_proposals([branch])  # the reply's own schema: a branch it cannot carry is left out
+                    proposals.append(branch)
+                except (PlanningError, GraphError) as exc:
+                    notes.append(f"{edge.id} {mode.name}({arm}, {obj}): no recovery ({_short(exc, 300)})")
     covered = sorted({p["monitor"]["failure_mode"] for p in proposals})
     why = f"{len(proposals)} branches ({', '.join(covered) or 'none'})" + (f"; {'; '.join(notes)}" if notes else "")
     return ArrangerReply(proposals=proposals, reasoning=why[:4000])
