@@ -5,7 +5,7 @@
     .venv/bin/python bench/bench_reasoner_latency.py --base-url http://localhost:8000/v1 --model Qwen2.5-VL-7B \
         --images send                                                 # your endpoint, your model
 
-Each role's request is the conformance suite's (`tests/servers/role_requests.py`: a peg judge with its two
+Each role's request is the conformance suite's (`kintsugi/testing/role_requests.py`: a peg judge with its two
 camera images, a pour task graph, a CoRAL push scene...). Tokens are the server's own counts (`usage`),
 summed over the call's attempts (a repair round is a second attempt); seconds are wall time per call,
 median over `--repeat` calls. With the tiny random model the seconds are the server's prompt processing
@@ -30,8 +30,8 @@ from kintsugi.reasoning.base import RecordingReasoner  # noqa: E402
 from kintsugi.reasoning.endpoint_options import OpenAIOptions  # noqa: E402
 from kintsugi.reasoning.openai_backend import OpenAIReasoner  # noqa: E402
 from kintsugi.reasoning.roles import ask  # noqa: E402
-from tests.servers.role_requests import build, system_roles  # noqa: E402
-from tests.servers import servers  # noqa: E402
+from kintsugi.testing import servers  # noqa: E402
+from kintsugi.testing.role_requests import build, system_roles  # noqa: E402
 
 
 def measure(base_url: str, model: str, roles: list[str], mode: str, images: str, repeat: int,
@@ -73,7 +73,10 @@ def main() -> None:
     p.add_argument("--max-reply-tokens", type=int, default=160)
     p.add_argument("--roles", help="comma-separated roles (default: every role of every system)")
     args = p.parse_args()
-    roles = args.roles.split(",") if args.roles else system_roles()
+    known = system_roles()  # registers every role (imports the methods that ask them)
+    roles = args.roles.split(",") if args.roles else known
+    if unknown := sorted(set(roles) - set(known)):
+        sys.exit(f"bench_reasoner_latency: unknown role(s) {', '.join(unknown)}; known: {', '.join(known)}")
     server = None
     if args.base_url is None:
         reason = servers.missing(args.server)

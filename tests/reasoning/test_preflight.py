@@ -9,7 +9,7 @@ import re
 import pytest
 
 from tests.fake_openai_server import FakeOpenAIServer, content
-from tests.reasoning.test_openai_backend import judge_request
+from kintsugi.testing.peg_requests import judge_request
 from kintsugi.core.record import ReasonerSettings, TrialSpec
 from kintsugi.reasoning import first_requests, make_reasoner
 from kintsugi.reasoning.base import RecordingReasoner

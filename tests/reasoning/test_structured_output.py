@@ -14,7 +14,7 @@ from kintsugi.reasoning.openai_backend import EndpointError, OpenAIReasoner
 from kintsugi.reasoning.roles import ask
 from kintsugi.methods.recovery.types import JudgeReply
 from tests.fake_openai_server import FakeOpenAIServer, content, http_error, tool_calls
-from tests.reasoning.test_openai_backend import GOOD_ANALYSIS, analyze_request, judge_request, plan_request
+from kintsugi.testing.peg_requests import GOOD_ANALYSIS, analyze_request, judge_request, plan_request
 
 STRICT_KEYS = ("response_format", "tools", "tool_choice")
 JUDGE_OK = {"success": True, "explanation": "peg inside, like the goal image"}

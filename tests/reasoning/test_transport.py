@@ -12,7 +12,7 @@ from kintsugi.reasoning.openai_backend import OpenAIReasoner
 from kintsugi.reasoning.roles import ask
 from kintsugi.reasoning.transport import ContextTooLong, EndpointError, ImagesRefused
 from kintsugi.methods.recovery import roles  # noqa: F401 - registers judge, analyze and plan
-from tests.reasoning.test_openai_backend import judge_request
+from kintsugi.testing.peg_requests import judge_request
 
 JUDGE_OK = {"success": True, "explanation": "seated"}
 

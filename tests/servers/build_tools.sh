@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# A tool venv for the real-server tests, once per machine: the `gguf` package (writes the tiny model) and
+# A tool venv for the real servers (kintsugi/testing/servers.py), once per machine: the `gguf` package (runs
+# kintsugi/testing/tiny_gguf.py, which writes the tiny model) and
 # llama-cpp-python's own OpenAI-compatible server from the same pinned source package as llama-server, without
 # compiling llama.cpp again: its Python package is installed with LLAMA_BUILD=OFF and loads the shared libraries
 # build_llama_server.sh made (linked into llama_cpp/lib). About half a minute after llama-server's build.

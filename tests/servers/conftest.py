@@ -13,7 +13,7 @@ from typing import Iterator
 
 import pytest
 
-from tests.servers.servers import Server, missing, start_llama_cpp_python, start_llama_server, tiny_model
+from kintsugi.testing.servers import Server, missing, start_llama_cpp_python, start_llama_server, tiny_model
 
 LARGE_CONTEXT = 32768
 SMALL_CONTEXT = 2048

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Build the real servers the tests in tests/servers use (once per machine; see mk/servers.mk).
+# Build the real servers kintsugi/testing/servers.py starts (for tests/servers and bench/bench_reasoner_latency.py),
+# once per machine; see mk/servers.mk.
 # Where the build is impossible (no C++ compiler or cmake), write the reason for the tests to skip with.
 # Usage: prepare.sh [PYTHON]
 set -euo pipefail

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 from typer.testing import CliRunner
 
-from tests.servers.servers import Server
+from kintsugi.testing.servers import Server
 
 
 def bench(server: Server, out: Path, task: str, method: str, variant: str, condition: str, *extra: str):

@@ -17,8 +17,8 @@ from kintsugi.reasoning.endpoint_options import OpenAIOptions
 from kintsugi.reasoning.openai_backend import OpenAIReasoner
 from kintsugi.reasoning.roles import ROLES, ask
 from kintsugi.reasoning.transport import ContextTooLong, EndpointError, ImagesRefused
-from tests.servers.role_requests import REQUESTS, build, system_roles
-from tests.servers.servers import Server
+from kintsugi.testing.role_requests import REQUESTS, build, system_roles
+from kintsugi.testing.servers import Server
 
 ROLE_NAMES = sorted(REQUESTS)
 system_roles()  # registers every role (imports the methods that ask them)
@@ -60,7 +60,7 @@ def conform(rec: RecordingReasoner, role_name: str) -> str:
 
 
 def test_every_role_of_every_system_has_a_conformance_request() -> None:
-    assert set(system_roles()) <= set(REQUESTS), "a registered role has no request in tests/servers/role_requests.py"
+    assert set(system_roles()) <= set(REQUESTS), "a registered role has no request in kintsugi/testing/role_requests.py"
 
 
 @pytest.mark.parametrize("mode", ["strict", "auto", "text"])

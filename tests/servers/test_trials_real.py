@@ -12,7 +12,7 @@ from typer.testing import CliRunner
 from kintsugi.core.record import ReasonerSettings, TrialSpec
 from kintsugi.core.runner import run_trial
 from kintsugi.reasoning.preflight import CapabilityError, preflight
-from tests.servers.servers import Server
+from kintsugi.testing.servers import Server
 
 SYSTEMS = [("peg-insertion", "recovery", "square", "none"), ("pour-single", "agentchord", "default", "none"),
            ("flip-box", "coral", "default", "all")]

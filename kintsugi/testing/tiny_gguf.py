@@ -1,6 +1,8 @@
-"""Write a tiny, seeded, random-weight llama model as GGUF (about 1 MB), for serving with llama.cpp in tests.
+"""Write a tiny, seeded, random-weight llama model as GGUF (about 1 MB), for serving with llama.cpp in
+conformance checks.
 
-Run with a Python that has the `gguf` package (the servers' tool venv, see `build_tools.sh`):
+Run as a script with a Python that has the `gguf` package (the servers' tool venv, see
+`tests/servers/build_tools.sh`; `servers.tiny_model` does); nothing in the package imports it:
     python tiny_gguf.py OUT.gguf [--context 32768] [--seed 0] [--words FILE ...]
 
 The model knows nothing; it exists so real server software can be driven end to end. Its tokenizer is

@@ -1,7 +1,8 @@
-"""Real OpenAI-compatible servers for tests: llama.cpp's `llama-server` and llama-cpp-python's server, both
-built once per machine from the pinned llama-cpp-python source package (`build_llama_server.sh` compiles
-llama.cpp once, as shared libraries; `build_tools.sh` installs llama-cpp-python on them; `make servers`), serving a tiny generated GGUF model on 127.0.0.1. Each server
-is started on a free port and stopped by its process id."""
+"""Real OpenAI-compatible servers for conformance checks: llama.cpp's `llama-server` and llama-cpp-python's
+server, both built once per machine from the pinned llama-cpp-python source package (`make servers` runs
+tests/servers/prepare.sh: `build_llama_server.sh` compiles llama.cpp once, as shared libraries;
+`build_tools.sh` installs llama-cpp-python on them), serving a tiny generated GGUF model (`tiny_gguf.py`
+beside this module) on 127.0.0.1. Each server is started on a free port and stopped by its process id."""
 
 from __future__ import annotations
 
@@ -16,17 +17,18 @@ from dataclasses import dataclass
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
-REPO = HERE.parents[1]
+PACKAGE = HERE.parent
 VERSION = os.environ.get("LLAMA_CPP_PYTHON_VERSION", "0.3.36")
 CACHE = Path(os.environ.get("KINTSUGI_CACHE", Path.home() / ".cache" / "kintsugi")) / f"llama-cpp-python-{VERSION}"
 LLAMA_SERVER = CACHE / "bin" / "llama-server"
 TOOLS_PYTHON = CACHE / "venv" / "bin" / "python"
 TOOLS_OK = CACHE / "venv" / ".kintsugi-llama-cpp-python-ok"
-"""Written by build_tools.sh once llama-cpp-python is installed on llama-server's shared libraries."""
+"""Written by tests/servers/build_tools.sh once llama-cpp-python is installed on llama-server's shared libraries."""
 GGUF_OK = CACHE / "venv" / ".kintsugi-gguf-ok"
 UNAVAILABLE = CACHE / "unavailable.txt"
 """Written by `make servers` when this machine cannot build the servers (no compiler, no cmake): the reason."""
-PROMPTS = sorted(REPO.glob("kintsugi/methods/*/prompts/*.md"))
+PROMPTS = sorted(PACKAGE.glob("methods/*/prompts/*.md"))
+"""The prompt files whose words make the tiny model's vocabulary."""
 START_TIMEOUT_S = 60.0
 
 
@@ -44,7 +46,8 @@ def missing(what: str) -> str | None:
 
 
 def tiny_model(out: Path, context: int = 32768, seed: int = 0) -> Path:
-    """Write the tiny GGUF model (its vocabulary from our prompt files) with the tool venv's `gguf`."""
+    """Write the tiny GGUF model (its vocabulary from the methods' prompt files) with the tool venv's `gguf`,
+    running `tiny_gguf.py` as a script (the main environment needs no `gguf`)."""
     subprocess.run([str(TOOLS_PYTHON), str(HERE / "tiny_gguf.py"), str(out), "--context", str(context),
                     "--seed", str(seed), "--words", *map(str, PROMPTS)], check=True, capture_output=True, timeout=120)
     return out

@@ -1,5 +1,7 @@
-"""One realistic request per registered role of every system, built without a simulator, for driving real
-model servers. `REQUESTS` maps a role name to a builder; a test fails when a role has none."""
+"""One realistic request per registered role of every system, built without a simulator, for driving a
+reasoner backend or a real model server through every role. `REQUESTS` maps a role name to a builder;
+`system_roles()` lists the roles the built-in methods register (the conformance suite fails when one has no
+builder)."""
 
 from __future__ import annotations
 
@@ -9,32 +11,32 @@ from pydantic import BaseModel
 
 
 def _judge() -> BaseModel:
-    from tests.reasoning.test_openai_backend import judge_request
+    from kintsugi.testing.peg_requests import judge_request
 
     return judge_request()
 
 
 def _analyze() -> BaseModel:
-    from tests.reasoning.test_openai_backend import analyze_request
+    from kintsugi.testing.peg_requests import analyze_request
 
     return analyze_request()
 
 
 def _plan() -> BaseModel:
-    from tests.reasoning.test_openai_backend import plan_request
+    from kintsugi.testing.peg_requests import plan_request
 
     return plan_request()
 
 
 def _composer() -> BaseModel:
-    from tests.taskgraph_fixtures import composer_request
+    from kintsugi.testing.pour_requests import composer_request
 
     return composer_request()
 
 
 def _arranger() -> BaseModel:
     from kintsugi.methods.agentchord.composer import COMPOSER
-    from tests.taskgraph_fixtures import arranger_request, composer_request
+    from kintsugi.testing.pour_requests import arranger_request, composer_request
 
     request = composer_request()
     return arranger_request(COMPOSER.embedded(request), request)
@@ -63,7 +65,7 @@ def _priors() -> BaseModel:
 
 
 def _formulate() -> BaseModel:
-    from tests.coral_scenes import PUSH
+    from kintsugi.testing.push_requests import PUSH
 
     return PUSH
 
@@ -71,7 +73,7 @@ def _formulate() -> BaseModel:
 def _adapt() -> BaseModel:
     from kintsugi.methods.coral.formulate import embedded_formulation
     from kintsugi.methods.coral.types import AdaptRequest, AttemptHistory
-    from tests.coral_scenes import PUSH
+    from kintsugi.testing.push_requests import PUSH
 
     plan = embedded_formulation(PUSH)
     history = AttemptHistory(attempt=1, stages=[], failed_stage=plan.stages[-1].name if plan.stages else None,
@@ -97,9 +99,10 @@ def system_roles() -> list[str]:
     from kintsugi.reasoning.preflight import roles_of
 
     load_builtins()
-    own = [e for e in METHODS if e.factory.__module__.startswith("kintsugi.")]  # not what other tests registered
+    own = [e for e in METHODS if e.factory.__module__.startswith("kintsugi.")]  # built-in methods, not plugins
     return sorted({r.name for entry in own for r in roles_of(entry)})
 
 
 def build(role: str) -> Any:
+    """A request of `role` (KeyError for a role without a builder)."""
     return REQUESTS[role]()
