@@ -12,6 +12,10 @@ with `kintsugi/__init__.py` on top. Importing the root package itself (`from kin
 no dependency on a layer as long as the root imports no module of the package (checked here): Python runs it
 before any module inside it anyway.
 
+`testing` (requests of every role, the real-server harness) sits beside `campaign`, and no module outside it
+imports it. Its `tiny_gguf.py` is a script for the servers' tool venv: it alone imports `gguf`, which the
+package does not depend on, and no module imports it.
+
 An import under `if TYPE_CHECKING:` is a dependency for the layers, but no import cycle: it never runs (a
 module annotating with the type of a module that imports it, as `taskgraph.validate` does `TaskGraph`).
 """
@@ -36,7 +40,7 @@ LAYERS: dict[str, int] = {
     "control": 1, "perception": 1, "sandbox": 1, "taskgraph": 1, "reasoning": 1,
     "worlds": 2,
     "methods": 3,
-    "campaign": 4,
+    "campaign": 4, "testing": 4,
     "export": 5,
     "cli": 6,
     "gym": 7,
@@ -159,3 +163,27 @@ def test_no_module_over_the_size_limit():
     assert not over, (f"{len(over)} module(s) over {MAX_LINES} lines (split them along their seams, one concept "
                       "per module):\n" + "\n".join(f"  {modules()[name].relative_to(ROOT.parent)}: {n} lines"
                                                   for n, name in reversed(over)))
+
+
+def test_nothing_outside_testing_imports_it():
+    graph = import_graph()
+    inside = f"{PACKAGE}.testing"
+    into = [(a, b) for a, b in graph.edges if layer_of(b)[0] == "testing" and layer_of(a)[0] != "testing"]
+    assert not into, (f"{inside} is for checking backends, methods and servers; the package itself must not "
+                      "import it:\n" + "\n".join(f"  {where(a, b)}" for a, b in sorted(into)))
+    script = f"{inside}.tiny_gguf"
+    assert script in graph and not list(graph.predecessors(script)), (
+        f"{script} is a script for the servers' tool venv (it imports gguf): "
+        f"{', '.join(sorted(graph.predecessors(script)))} import(s) it")
+    gguf = sorted(name for name, path in modules().items() if name != script and _imports(path, "gguf"))
+    assert not gguf, f"the package does not depend on gguf (only {script}, a script, uses it): {', '.join(gguf)}"
+
+
+def _imports(path: Path, top: str) -> bool:
+    """Whether the module at `path` imports the top-level package `top` anywhere."""
+    for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+        if isinstance(node, ast.Import) and any(a.name.split(".")[0] == top for a in node.names):
+            return True
+        if isinstance(node, ast.ImportFrom) and not node.level and (node.module or "").split(".")[0] == top:
+            return True
+    return False
