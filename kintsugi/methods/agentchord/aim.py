@@ -19,7 +19,7 @@ def relation_call(node: Node, robot: Any, seen: dict[str, tuple[float, float]], 
     its centroid's x, y there); the object may have been slid or knocked since. A stacking place (its bottom to
     the support's top) also takes the support's top as perceived now. Unchanged when the object moved less
     than RE_AIM_M, or is not seen."""
-    held = {k for k, n in robot.arm_state(call["arm"]).touching.items() if n == 2}
+    held = set(robot.arm_state(call["arm"]).held)
     ref, onto = None, False
     for c in node.constraints:
         if c.kind == "within" and c.point.entity in held and c.container not in held:
@@ -46,7 +46,7 @@ def region_call(node: Node, robot: Any, call: dict) -> dict:
     """A place into a region that rides with another object (the target node's anchored `in_region` on the held
     object: "to the left of the plate"), shifted by how far that object is perceived to have moved since the
     region was placed. Unchanged when it moved less than RE_AIM_M, or is not seen."""
-    held = {k for k, n in robot.arm_state(call["arm"]).touching.items() if n == 2}
+    held = set(robot.arm_state(call["arm"]).held)
     for c in node.constraints:
         if c.kind != "in_region" or c.anchor is None or c.point.entity not in held or c.anchor in held:
             continue

@@ -82,3 +82,14 @@ def objects_of(edge: Edge) -> set[str]:
             if role != "arm":
                 names.add(entity)
     return names
+
+
+VERDICT_UPRIGHT_DEG = 8.0
+"""The goal check's `upright` tolerance at most: stricter than the tabletop scorers' 10 degrees by perception's
+error on a standing object's axis, so the method never calls a leaning object upright when a judge would not."""
+
+
+def strict(constraints: Any) -> list:
+    """The goal's constraints as the verdict reads them: `upright` no looser than VERDICT_UPRIGHT_DEG."""
+    return [c.model_copy(update={"tol_deg": min(c.tol_deg, VERDICT_UPRIGHT_DEG)}) if c.kind == "upright" else c
+            for c in constraints]

@@ -29,7 +29,8 @@ from rich.markup import escape
 from kintsugi.core.errors import ReasoningError
 from kintsugi.core.log import TrialLog
 from kintsugi.core.record import SkillLog
-from kintsugi.methods.agentchord.conducting import ConductorConfig, ConductorError, Metrics, objects_of, proprioceptive
+from kintsugi.methods.agentchord.conducting import (ConductorConfig, ConductorError, Metrics, objects_of, proprioceptive,
+                                                    strict)
 from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes
 from kintsugi.methods.agentchord.observe import ARMS, features
 from kintsugi.methods.agentchord.pouring import Pouring
@@ -52,15 +53,6 @@ MERGE_FAILS = 2
 MAX_RERUNS = 4
 """...as does one run this many times (each run disturbed again: a grasp closing on nothing, a loss)."""
 REPLANNED = object()
-VERDICT_UPRIGHT_DEG = 8.0
-"""The goal check's `upright` tolerance at most: stricter than the tabletop scorers' 10 degrees by perception's
-error on a standing object's axis, so the method never calls a leaning object upright when a judge would not."""
-
-
-def strict(constraints: Any) -> list:
-    """The goal's constraints as the verdict reads them: `upright` no looser than VERDICT_UPRIGHT_DEG."""
-    return [c.model_copy(update={"tol_deg": min(c.tol_deg, VERDICT_UPRIGHT_DEG)}) if c.kind == "upright" else c
-            for c in constraints]
 
 
 class Conductor(Recovering, Settling, Reaching, Pushing, Pouring):
@@ -175,6 +167,8 @@ class Conductor(Recovering, Settling, Reaching, Pushing, Pouring):
     def fall_back(self, edge: Edge, reason: str = f"its merge check failed {MERGE_FAILS} times") -> Any:
         """Re-plan from the current observation (`replan`, at most `max_replans` times): REPLANNED with the new
         graph adopted, or False (recorded) when there is no re-planner or its budget is spent."""
+        if self._may_replan():
+            self._settle_hands(edge)
         return self._replan(f"the recovery of {edge.id} does not hold ({reason})")
 
     def _may_replan(self) -> bool:
@@ -268,7 +262,7 @@ class Conductor(Recovering, Settling, Reaching, Pushing, Pouring):
         put down, and pressed the empty hand onto the cup)."""
         if arm not in ARMS:
             return False
-        return not any(n == 2 for n in self.robot.arm_state(arm).touching.values())
+        return not self.robot.arm_state(arm).held
 
     def _step_watch(self, monitors: list, fired: list) -> Callable[[Any], bool]:
         """The per-control-step observer: Eq. 12 over `GripSense`; True (interrupt the action) on a firing."""
@@ -359,7 +353,7 @@ class Conductor(Recovering, Settling, Reaching, Pushing, Pouring):
     def _keyframe_call(self, edge: Edge, call: dict) -> dict:
         arm = call["arm"]
         state = self.robot.arm_state(arm)
-        held_names = [k for k, n in state.touching.items() if n == 2]
+        held_names = sorted(state.held)
         refs = {e for c in self.graph.node(edge.target).constraints for e, role, _ in c.refs() if role != "arm"}
         objs = self.robot.features({call["obj"], *held_names, *refs})
         tcp = np.array(state.tcp_pos)

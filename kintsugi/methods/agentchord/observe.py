@@ -29,14 +29,14 @@ def seen_objects(objects: dict[str, Any]) -> list[SeenObject]:
 
 def seen_arms(arms: dict[str, Any]) -> list[SeenArm]:
     return [SeenArm(name=name, tcp_pos=a.tcp_pos, gripper_opening_m=a.gripper_opening_m,
-                    gripper_closed=a.gripper_closed, holding=sorted(k for k, n in a.touching.items() if n == 2))
+                    gripper_closed=a.gripper_closed, holding=sorted(a.held))
             for name, a in arms.items()]
 
 
 def arm_features(arm: Any) -> ArmState:
     """One arm's proprioception as the monitors read it: tool position, opening, commanded state, contacts."""
     return ArmState(eef=arm.tcp_pos, opening=float(arm.gripper_opening_m), closed=bool(arm.gripper_closed),
-                    touching=frozenset(k for k, n in arm.touching.items() if n == 2))
+                    touching=arm.held)
 
 
 @dataclass(frozen=True, slots=True)

@@ -56,7 +56,7 @@ class Pushing:
     def pushers(self, obj: str, centre: np.ndarray) -> list[str]:
         """The plan's arms with an empty hand within FARTHEST_M of the object, nearest first."""
         arms = [a for a in sorted(self.arms) if a in ("left", "right") and not self.far(a, centre)
-                and not any(n == 2 for n in self.robot.arm_state(a).touching.values())]
+                and not self.robot.arm_state(a).held]
         return sorted(arms, key=lambda a: float(np.linalg.norm(centre[:2] - np.asarray(self.robot.bases[a])[:2])))
 
     def push_way(self, obj: str, f: Any) -> dict | None:

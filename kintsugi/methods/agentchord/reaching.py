@@ -173,7 +173,7 @@ class Reaching:
             options = grasp_alternatives(call, f, np.asarray(self.robot.bases[arm], float))
         elif name == "place":
             seen = self.robot.features()
-            held = [k for k, n in self.robot.arm_state(arm).touching.items() if n == 2]
+            held = sorted(self.robot.arm_state(arm).held)
             others = [v for k, v in seen.items() if k not in held]
             options = place_alternatives(call, others, seen.get(held[0]) if held else None,
                                          any(locates(self.graph.node(edge.target), k) for k in held))
@@ -218,7 +218,7 @@ class Reaching:
         there: slide it along the table towards the middle of the arm's reach first. True when it was slid."""
         state = self.robot.arm_state(call["arm"])
         tcp = np.asarray(state.tcp_pos, float)
-        if not any(n == 2 for n in state.touching.values()) or tcp[2] > DRAG_MAX_Z_M:
+        if not state.held or tcp[2] > DRAG_MAX_Z_M:
             return False
         base = np.asarray(self.robot.bases[call["arm"]], float)
         d = tcp[:2] - base[:2]

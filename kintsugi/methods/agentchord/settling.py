@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 
+from kintsugi.methods.agentchord.conducting import objects_of
 from kintsugi.perception.features import ObjectFeatures
 from kintsugi.taskgraph.model import Edge
 
@@ -39,6 +40,7 @@ class Settling:
 
     robot: Any
     log: Any
+    goal_objects: set[str]
 
     def wait_still(self, arm: str, objs: set[str], edge: Edge) -> bool:
         """True once the objects are at rest; False if they still move after SETTLE_TRIES reads."""
@@ -71,6 +73,15 @@ class Settling:
                 return True
             prev = (pts, axes)
         return False
+
+    def _settle_hands(self, edge: Edge) -> None:
+        """Before a re-plan reads the scene: a hand closed on nothing it holds opens, and the objects come to rest.
+        A recovery given up in mid-grasp can leave an object falling, or resting on closed fingers, which no
+        fact of the planner's describes (a bottle neither held nor on the table: "never achievable")."""
+        for arm in ("left", "right"):
+            state = self.robot.arm_state(arm)
+            if state.gripper_closed and not state.held:
+                self.wait_still(arm, self.goal_objects | objects_of(edge), edge)
 
     def _set_down_caught(self, arm: str, seen: dict, edge: Edge) -> bool:
         """An object that came to rest in the open hand (both finger pads touch it, and it hangs clear of the

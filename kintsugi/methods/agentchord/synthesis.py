@@ -90,7 +90,7 @@ class EdgeSynthesis:
                                                     for a in edge.actions):
             return None
         plan = getattr(self.robot, "execute", None)
-        for obj in sorted(k for k, n in self.robot.arm_state(call["arm"]).touching.items() if n == 2):
+        for obj in sorted(self.robot.arm_state(call["arm"]).held):
             first = self.seen.get(obj)
             moved = None if first is None else {**call, "x": round(first[0], 4), "y": round(first[1], 4)}
             if moved and self._clear(obj, first) and (plan is None or plan(moved, plan_only=True).planned):
@@ -104,8 +104,7 @@ class EdgeSynthesis:
         from the scene it sees then, does the same; pour-single seed 67 cost AgentChord 35 control steps more
         than code-as-monitor). A bottle dropped on the way to the cup often lies beside the cup: set down there,
         the hand knocked the cup over (seed 70)."""
-        touching = self.robot.arm_state(call["arm"]).touching
-        for obj in sorted(k for k, n in touching.items() if n == 2):
+        for obj in sorted(self.robot.arm_state(call["arm"]).held):
             first, last = self.seen.get(obj), self.taken.get(obj)
             if first is None or last is None:
                 continue
@@ -382,7 +381,7 @@ class EdgeSynthesis:
         object every one of `arms` holds now (both pads touching)."""
         held = None
         for arm in arms:
-            now = {k for k, n in self.robot.arm_state(arm).touching.items() if n == 2}
+            now = set(self.robot.arm_state(arm).held)
             held = now if held is None else held & now
         for c in self.graph.node(edge.target).constraints:
             if c.kind != "in_region" or c.point.feature is not None or c.point.along is not None:

@@ -33,7 +33,7 @@ def hand_rotation(arm_state: Any) -> np.ndarray:
 
 
 def held_by(arm_state: Any) -> set[str]:
-    return {k for k, n in arm_state.touching.items() if n == 2}
+    return set(arm_state.held)
 
 
 class Tops:

@@ -33,6 +33,22 @@ Vec3 = tuple[float, float, float]
 NEEDS_FEATURES = ("grasp", "move_to_obj", "place", "push")
 
 
+HELD_MIN_OPENING_M = 0.01
+"""A hand commanded closed that still stands at least this open has something between its fingers."""
+
+
+def held_objects(touching: dict[str, int], opening: float, closed: bool) -> frozenset[str]:
+    """What the hand holds, from its tactile pads and its gripper: every object both pads touch; or the one
+    object one pad touches when the hand, commanded closed, is held open by it and the other pad touches
+    nothing. A lying bottle pinched off its equator, or a cup hanging on one finger, can lose one pad's contact
+    for a few control steps while it stays in the hand (the opening stays at its width); an object that left
+    the hand lets the fingers close or touches no pad."""
+    both = frozenset(k for k, n in touching.items() if n == 2)
+    if both or not closed or opening < HELD_MIN_OPENING_M or len(touching) != 1:
+        return both
+    return frozenset(k for k, n in touching.items() if n == 1)
+
+
 class ArmState(StrictModel):
     """One arm as its own sensors report it (joint encoders, gripper, finger-pad touch)."""
 
@@ -46,6 +62,11 @@ class ArmState(StrictModel):
     touching: dict[str, int]
     """Objects touching the finger pads -> how many of the two pads touch each."""
     pad_force_n: float
+
+    @property
+    def held(self) -> frozenset[str]:
+        """What the hand holds (`held_objects`)."""
+        return held_objects(self.touching, self.gripper_opening_m, self.gripper_closed)
 
 
 class Observation(StrictModel):
@@ -105,7 +126,7 @@ class GripSense:
     opening: float
     closed: bool
     touching: frozenset[str]
-    """Objects touched by both finger pads (held)."""
+    """What the hand holds (`held_objects`: both finger pads, or one pad with the hand held open by it)."""
     pad_force_n: float
 
 
@@ -181,9 +202,9 @@ class TabletopRobot:
         w = self._world
         pos, _ = w.tcp_pose(arm)
         touching, force = w.pad_contacts(arm)
-        return GripSense(eef=(float(pos[0]), float(pos[1]), float(pos[2])), opening=w.gripper_opening(arm),
-                         closed=w.gripper_commanded_closed(arm),
-                         touching=frozenset(k for k, n in touching.items() if n == 2), pad_force_n=force)
+        opening, closed = w.gripper_opening(arm), w.gripper_commanded_closed(arm)
+        return GripSense(eef=(float(pos[0]), float(pos[1]), float(pos[2])), opening=opening, closed=closed,
+                         touching=held_objects(touching, opening, closed), pad_force_n=force)
 
     def observation(self, images: bool = True) -> Observation:
         return Observation(

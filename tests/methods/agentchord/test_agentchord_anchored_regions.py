@@ -56,7 +56,7 @@ class _Robot:
         self.plate = plate
 
     def arm_state(self, arm: str) -> SimpleNamespace:
-        return SimpleNamespace(touching={"fork": 2})
+        return SimpleNamespace(touching={"fork": 2}, held=frozenset({"fork"}))
 
     def features(self, names) -> dict:  # noqa: ANN001
         return {"plate": SimpleNamespace(visible=True, centroid=(*self.plate, 0.01))}

@@ -12,11 +12,17 @@ from kintsugi.methods.agentchord.symbolic import PlanningError
 from tests.taskgraph.test_taskgraph_forward import chain
 
 
-def _conductor(replan=None, max_replans: int = 2) -> Conductor:  # noqa: ANN001
+def _conductor(replan=None, max_replans: int = 2, closed: dict | None = None) -> Conductor:  # noqa: ANN001
     c = Conductor.__new__(Conductor)  # only the fallback's state: no robot, nothing moves
     c.graph, c.replan, c.log = chain([1.0, 1.0]), replan, TrialLog()
     c.metrics, c.config = Metrics(), ConductorConfig(max_replans=max_replans)
-    c.robot, c.synthesis, c.pours = SimpleNamespace(sim_time=1.5), SimpleNamespace(graph=c.graph), {}
+    hands = closed or {}  # arm -> what it holds, for the hands commanded closed
+
+    def arm_state(arm: str) -> SimpleNamespace:
+        return SimpleNamespace(gripper_closed=arm in hands, held=frozenset(hands.get(arm, ())))
+
+    c.robot = SimpleNamespace(sim_time=1.5, arm_state=arm_state)
+    c.synthesis, c.pours, c.goal_objects = SimpleNamespace(graph=c.graph), {}, {"cup"}
     return c
 
 
@@ -53,3 +59,15 @@ def test_the_run_figures_count_the_replans_and_old_records_read_as_none() -> Non
                graph_edges=1, monitors=0)
     assert RunFigures(**old).replans == 0
     assert RunFigures(**old, replans=2).replans == 2
+
+
+def test_a_hand_closed_on_nothing_it_holds_opens_and_the_scene_settles_before_the_replan() -> None:
+    new = chain([2.0, 2.0])
+    c = _conductor(lambda: new, closed={"left": (), "right": ("bottle",)})
+    settled: list[tuple[str, set]] = []
+    c.wait_still = lambda arm, objs, edge: settled.append((arm, set(objs))) or True  # type: ignore[method-assign]
+    assert c.fall_back(c.graph.edge("e0")) is REPLANNED
+    assert settled == [("left", {"cup"})]  # the right hand holds its bottle and stays closed
+    c = _conductor(None, closed={"left": ()})
+    c.wait_still = lambda arm, objs, edge: settled.append((arm, set(objs))) or True  # type: ignore[method-assign]
+    assert c.fall_back(c.graph.edge("e0")) is False and len(settled) == 1  # no re-plan left: nothing to settle for

@@ -25,6 +25,10 @@ class Hand:
     tcp_rpy_deg: tuple
     touching: dict
 
+    @property
+    def held(self) -> frozenset[str]:
+        return frozenset(k for k, n in self.touching.items() if n == 2)
+
 
 def _spoon(head_x: float) -> Seen:
     """A spoon lying along x; its head (the axis end nearer the centroid) at +x when head_x > 0."""

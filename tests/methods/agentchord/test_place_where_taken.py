@@ -33,6 +33,10 @@ class _Feat:
 class _Arm:
     touching: dict[str, int]
 
+    @property
+    def held(self) -> frozenset[str]:
+        return frozenset(k for k, n in self.touching.items() if n == 2)
+
 
 @dataclass
 class _Sense:
