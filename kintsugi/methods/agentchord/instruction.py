@@ -49,7 +49,9 @@ def held_up(task: str, objects: Any, arms: list[str] = ("left", "right")) -> lis
 def instructed_ops(task: str, domain: Any, arms: list[str], objects: list[str], places: list[str] = (),
                    reading: Reading | None = None) -> list:
     """The grounded operators the instruction allows: an object given to one arm is taken from the table by
-    that arm only (no instance that picks it up adds holding(other arm, it); a handover may pass it on), until
+    that arm only (no instance that picks it up adds holding(other arm, it); a handover may pass it on), unless
+    it lies where that arm cannot reach it (a knocked or dropped object: the other arm takes it up, and a
+    handover gives it back where the task needs the instruction's arm), or until
     it has handed the object over to the other arm: from then on only the taker picks it up again after a
     drop (the giver may not reach where it fell); an object to be held up must be lifted before any operator makes a fact that
     names it as the target (carry over it, pour into it); an object given to both arms is taken by both at once.
@@ -60,6 +62,7 @@ def instructed_ops(task: str, domain: Any, arms: list[str], objects: list[str], 
         reading = reading_of(task, scene_of(objects, list(arms)))
     bound, up = {o: a for o, a in reading.bindings.items() if a in arms}, reading.held_up
     handovers = any(p.name == "handed_over" and len(p.params) == 3 for p in domain.predicates)
+    reaches = any(p.name == "reaches" and len(p.params) == 2 for p in domain.predicates)
     both = set(reading.both_arms)
     out = []
     for op in ground(domain, arms, objects, places):
@@ -68,16 +71,20 @@ def instructed_ops(task: str, domain: Any, arms: list[str], objects: list[str], 
         other = _other_taker(op, bound) or _other_hand(op, bound)
         if other is not None and not handovers:
             continue
+        variants = [op]
         if other is not None:
             arm, obj = other
-            op = replace(op, pre_pos=op.pre_pos | {("handed_over", obj, bound[obj], arm)})
+            variants = [replace(op, pre_pos=op.pre_pos | {("handed_over", obj, bound[obj], arm)})]
+            if reaches:  # where the instruction's arm cannot reach it, the arm that can takes it up
+                variants.append(replace(op, pre_neg=op.pre_neg | {("reaches", bound[obj], obj)}))
         elif handovers and (own := _own_take(op, bound)) is not None:  # once handed over, the taker's object
             arm, obj = own
-            op = replace(op, pre_neg=op.pre_neg | {("handed_over", obj, arm, b) for b in arms if b != arm})
-        targets = {a[2] for a in op.add if len(a) == 3 and a[1] in objects and a[2] in up}
-        if targets:
-            op = replace(op, pre_pos=op.pre_pos | {("lifted", t) for t in targets})
-        out.append(op)
+            variants = [replace(op, pre_neg=op.pre_neg | {("handed_over", obj, arm, b) for b in arms if b != arm})]
+        for op in variants:
+            targets = {a[2] for a in op.add if len(a) == 3 and a[1] in objects and a[2] in up}
+            if targets:
+                op = replace(op, pre_pos=op.pre_pos | {("lifted", t) for t in targets})
+            out.append(op)
     return out
 
 
