@@ -11,6 +11,8 @@ conductor then ends the trial as a recorded failure with the reason, or re-plans
 - a grasp of a standing object: the side approach turns about the vertical (the default approach, away from
   the base, runs out of reach near the robot or far out);
 - an object no arm of the plan grasps where it lies: pushed back into reach first (`Pushing`);
+- a turn of a held object the arm cannot make where the hand is (standing a bottle up beside the body): the
+  object is carried towards the middle of the arm's reach first;
 - a place whose spot cannot be reached: the nearest clear spots around it, within the tolerance of the node it
   leads to when that node says where the object must be, else up to `FREE_PLACE_M` away.
 """
@@ -40,6 +42,7 @@ SHORT_PRE_GRASP_M = 0.04
 COMFORT_M = 0.5
 """Distance from the arm's base (horizontal) a dragged object is brought towards."""
 PULL_LIFT_M = 0.015
+TURN_CARRIES = 2
 DRAG_MAX_Z_M = 0.08
 """A hand this low holds its object on the table (a lying bottle just taken): it can slide it."""
 PULL_PITCHES_DEG = (30.0, -30.0, 50.0, -50.0)
@@ -182,6 +185,9 @@ class Reaching:
             if name == "move_by_offset" and self.drag_held(edge, call):
                 if self.feasible(call):
                     return self.robot.execute(call), call
+            turned = self.carry_to_turn(edge, call) if name in ("rotate_eef", "move_by_offset") else None
+            if turned is not None:
+                return self.robot.execute(turned), turned
         for alt in options:
             if self.feasible(alt):
                 tried = self.robot.execute(alt)
@@ -231,6 +237,35 @@ class Reaching:
                        f"lies; slid {np.round(move, 3).tolist()} m along the table first")
         self._execute(edge, "move_by_offset", {k: v for k, v in slide.items() if k != "action"}, unplanned_ok=True)
         return True
+
+    def carry_to_turn(self, edge: Any, call: dict) -> dict | None:
+        """A turn of a held, raised object the arm cannot make where the hand is (a stand-up beside the robot's
+        body): carry it at its height towards the point straight ahead of the arm's base at `COMFORT_M`, up to
+        `TURN_CARRIES` legs of `PULL_M`, until the turn can be made there. The turn to make then (synthesized
+        again where the hand now is: an upright turn faces away from the shoulder), or None."""
+        arm = call["arm"]
+        state = self.robot.arm_state(arm)
+        tcp = np.asarray(state.tcp_pos, float)
+        turn = call.get("action") == "rotate_eef" or (call.get("drpy_deg") is not None
+                                                       and not any(abs(float(v)) > 1e-9 for v in call.get("dxyz", ())))
+        if not turn or not state.held or tcp[2] <= DRAG_MAX_Z_M:
+            return None
+        base = np.asarray(self.robot.bases[arm], float)
+        own = next((a for a in edge.actions if a.name == "rotate_eef" and a.args.get("arm") == arm), None)
+        for _ in range(TURN_CARRIES):
+            tcp = np.asarray(self.robot.arm_state(arm).tcp_pos, float)
+            d = base[:2] + np.array([COMFORT_M, 0.0]) - tcp[:2]
+            move = d * min(1.0, PULL_M / max(float(np.linalg.norm(d)), 1e-6))
+            carry = {"action": "move_by_offset", "arm": arm, "dxyz": [float(move[0]), float(move[1]), 0.0]}
+            if float(np.linalg.norm(move)) < SLIDE_STEP_M or not self.feasible(carry):
+                return None
+            self.log.event(self.robot.sim_time, "carried to turn", f"{edge.id}: the turn is out of reach where the "
+                           f"hand is; carried the held object {np.round(move, 3).tolist()} m first")
+            self._execute(edge, "move_by_offset", {k: v for k, v in carry.items() if k != "action"}, unplanned_ok=True)
+            again = call if own is None else self.synthesis.adapt(edge, {"action": "rotate_eef", **own.args})
+            if self.feasible(again):
+                return again
+        return None
 
     def pull_into_reach(self, edge: Any, call: dict, f: ObjectFeatures) -> bool:
         """Drag a lying object the arm cannot grasp for the action back into reach: take it by the part of it

@@ -74,3 +74,53 @@ def test_an_unreachable_object_is_a_recorded_failure_not_an_error() -> None:
     assert not r.success and not r.framework_success
     assert any(e.kind in ("unreachable", "failed", "replan refused") for e in r.events), \
         [(e.kind, e.detail) for e in r.events]
+
+
+class _TurnRobot:
+    """A right hand holding a bottle beside the body; a turn plans only once the hand is 0.2 m or more out."""
+
+    def __init__(self, tcp: tuple[float, float, float], held: bool = True) -> None:
+        self.tcp, self.held, self.bases, self.sim_time = np.array(tcp), held, {"right": BASE}, 1.0
+
+    def arm_state(self, arm: str):  # noqa: ANN201
+        from types import SimpleNamespace
+
+        return SimpleNamespace(tcp_pos=tuple(self.tcp), held=frozenset({"bottle"} if self.held else ()))
+
+    def execute(self, call: dict, plan_only: bool = False):  # noqa: ANN201
+        from types import SimpleNamespace
+
+        out = call["action"] == "move_by_offset" and any(call["dxyz"]) or self.tcp[0] >= 0.2
+        if out and not plan_only and call["action"] == "move_by_offset":
+            self.tcp = self.tcp + np.asarray(call["dxyz"], float)
+        return SimpleNamespace(planned=bool(out), clipped=False)
+
+
+def _turner(robot: _TurnRobot):  # noqa: ANN202
+    from types import SimpleNamespace
+
+    from kintsugi.core.log import TrialLog
+    from kintsugi.methods.agentchord.reaching import Reaching
+
+    r = Reaching.__new__(Reaching)
+    r.robot, r.log = robot, TrialLog()
+    r._execute = lambda edge, name, args, unplanned_ok=False: robot.execute({"action": name, **args})  # noqa: ARG005
+    r.synthesis = SimpleNamespace(adapt=lambda edge, call: {**call, "resynthesized": tuple(robot.tcp)})
+    return r
+
+
+def test_a_turn_out_of_reach_beside_the_body_is_made_after_carrying_the_object_out() -> None:
+    from types import SimpleNamespace
+
+    robot = _TurnRobot((0.06, -0.05, 0.18))
+    edge = SimpleNamespace(id="re.stand", actions=[SimpleNamespace(name="rotate_eef", args={
+        "arm": "right", "angle_deg": 90.0, "axis": "closing"})])
+    turn = {"action": "move_by_offset", "arm": "right", "dxyz": (0.0, 0.0, 0.0), "drpy_deg": (0.0, 90.0, 0.0)}
+    reacher = _turner(robot)
+    again = reacher.carry_to_turn(edge, turn)
+    assert again is not None and again["action"] == "rotate_eef" and again["resynthesized"][0] >= 0.2
+    assert robot.tcp[2] == 0.18 and np.linalg.norm(robot.tcp[:2] - (BASE[:2] + [0.5, 0.0])) < 0.2
+    assert [e.kind for e in reacher.log.events] == ["carried to turn"] * 2  # two legs of at most 0.15 m
+    assert _turner(_TurnRobot((0.06, -0.05, 0.18), held=False)).carry_to_turn(edge, turn) is None  # nothing held
+    assert _turner(_TurnRobot((0.06, -0.05, 0.03))).carry_to_turn(edge, turn) is None  # still on the table
+    assert _turner(_TurnRobot((0.06, -0.05, 0.18))).carry_to_turn(edge, {**turn, "dxyz": (0.0, 0.0, 0.05)}) is None
