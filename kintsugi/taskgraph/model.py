@@ -24,8 +24,9 @@ from kintsugi.taskgraph.vocabulary import Vocabulary
 Kind = Literal["nominal", "recovery"]
 GripperState = Literal["open", "closed"]
 
-MAX_NODES = 256
-MAX_EDGES = 1024
+MAX_NODES = 1024
+"""A re-plan from a disturbed scene (a handover, stand-ups) with a recovery branch on every edge reached 315."""
+MAX_EDGES = 4096
 MAX_ITEMS = 32
 """Per node/edge: constraints, actions; per edge: monitors (16)."""
 MAX_JSON_CHARS = 2_000_000

@@ -11,7 +11,7 @@ from kintsugi.core.errors import KintsugiError
 from kintsugi.taskgraph.augment import RecoveryProposal, augment, parse_proposals
 from kintsugi.taskgraph.base import GraphError
 from kintsugi.taskgraph.forward import cost_to_go, next_edge
-from kintsugi.taskgraph.model import TaskGraph
+from kintsugi.taskgraph.model import MAX_NODES, TaskGraph
 from kintsugi.taskgraph.vocabulary import Vocabulary
 from tests.taskgraph_fixtures import VOCAB, act, pour_graph, pour_graph_data
 
@@ -128,7 +128,7 @@ BAD = {
     "wrong type": (lambda d: d.update(nodes="home,done"), "nodes"),
     "wrong version": (lambda d: d.update(version=2), "version"),
     "bad id": (lambda d: node(d, "poured").update(id="has space"), "nodes[3]"),
-    "too many nodes": (lambda d: d["nodes"].extend({"id": f"n{i}"} for i in range(300)), "nodes"),
+    "too many nodes": (lambda d: d["nodes"].extend({"id": f"n{i}"} for i in range(MAX_NODES + 1)), "nodes"),
     "deep args": (lambda d: edge(d, "e_grasp")["actions"][0]["args"].update(
         x=json.loads("[" * 20 + "]" * 20)), "nested deeper"),
 }

@@ -32,7 +32,7 @@ from kintsugi.reasoning.roles import ROLES, Role, ask
 from kintsugi.taskgraph.augment import augment, parse_proposals
 from kintsugi.taskgraph.base import GraphError
 from kintsugi.taskgraph.forward import FilterResult, cost_to_go, forward_filter
-from kintsugi.taskgraph.model import TaskGraph
+from kintsugi.taskgraph.model import MAX_NODES, TaskGraph
 
 LOCATIONS = ("in_region", "inside")
 """Facts that say where an object is to end up: a carry or place is taking it there."""
@@ -201,6 +201,13 @@ def embedded_arrange(request: ArrangerRequest) -> ArrangerReply:
                     proposals.append(branch)
                 except (PlanningError, GraphError) as exc:
                     notes.append(f"{edge.id} {mode.name}({arm}, {obj}): no recovery ({_short(exc, 300)})")
+    room, kept = MAX_NODES - len(graph.nodes), 0
+    for i, p in enumerate(proposals):  # the reply's own bound on the augmented graph: later edges' branches give way
+        if kept + len(p["nodes"]) > room:
+            notes.append(f"{len(proposals) - i} branches left out: the graph would exceed {MAX_NODES} nodes")
+            proposals = proposals[:i]
+            break
+        kept += len(p["nodes"])
     covered = sorted({p["monitor"]["failure_mode"] for p in proposals})
     why = f"{len(proposals)} branches ({', '.join(covered) or 'none'})" + (f"; {'; '.join(notes)}" if notes else "")
     return ArrangerReply(proposals=proposals, reasoning=why[:4000])

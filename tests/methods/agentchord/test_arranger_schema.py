@@ -44,3 +44,18 @@ def test_a_branch_that_first_sees_how_the_object_lies_fits_the_bounds() -> None:
                "recovery": "re.0"}
     (proposal,) = parse_proposals([{"edge": "e1", "monitor": monitor, "nodes": nodes, "edges": edges}])
     assert len(proposal.nodes) == 20
+
+
+def test_branches_that_would_take_the_graph_past_its_node_bound_are_left_out(monkeypatch: pytest.MonkeyPatch) -> None:
+    from kintsugi.taskgraph.model import TaskGraph
+
+    request = composer_request()
+    arrange = arranger_request(COMPOSER.embedded(request), request)
+    full = arranger.embedded_arrange(arrange)
+    nominal = len(TaskGraph.from_data(arrange.graph).nodes)
+    cap = nominal + sum(len(p["nodes"]) for p in full.proposals) // 2
+    monkeypatch.setattr(arranger, "MAX_NODES", cap)
+    cut = arranger.embedded_arrange(arrange)
+    assert 0 < len(cut.proposals) < len(full.proposals)
+    assert nominal + sum(len(p["nodes"]) for p in cut.proposals) <= cap
+    assert f"the graph would exceed {cap} nodes" in cut.reasoning
