@@ -29,7 +29,8 @@ HEADING_TOL_DEG = 10.0
 def observed_facts(request: Any, domain: Domain, places: list[str] = ()) -> State:
     """Facts read off the observation, for the predicates the domain declares (closed world: the rest are
     false): hand_empty/holding from the arms' pads, upright from perception's uprightness, on_table from the
-    object's lowest point (lifted: held and clear of it), released when no arm holds it."""
+    object's lowest point, held or not (a re-plan can find a hand closed on an object still standing on the
+    table: it lifts it; lifted: held and clear of it), released when no arm holds it."""
     known = {p.name for p in domain.predicates}
     held = {o: a.name for a in request.arms for o in a.holding}
     facts: set[Atom] = set()
@@ -43,7 +44,7 @@ def observed_facts(request: Any, domain: Domain, places: list[str] = ()) -> Stat
             continue
         if "upright" in known and looks_upright(o):
             facts.add(("upright", o.name))
-        if "on_table" in known and o.bottom_z is not None and o.bottom_z < ON_TABLE_Z_M and o.name not in held:
+        if "on_table" in known and o.bottom_z is not None and o.bottom_z < ON_TABLE_Z_M:  # held too: lift it then
             facts.add(("on_table", o.name))
         if "lifted" in known and o.bottom_z is not None and o.bottom_z > LIFTED_Z_M and o.name in held:
             facts.add(("lifted", o.name))
