@@ -20,6 +20,12 @@ class ConductorError(KintsugiError):
     """The conductor cannot go on (action budget spent, a recovery node with no way back)."""
 
 
+class Interrupted(Exception):
+    """A step observer (a monitor, a recovery's loss watch) stopped an action. Raised so that an action's way
+    round (a drag, a push, a carry, a set-down) does not go on issuing moves the same watch stops at their first
+    step: the edge that runs the action reads the watch and decides what follows."""
+
+
 class ConductorConfig(StrictModel):
     max_actions: int = 200
     """Atomic actions per episode before the conductor gives up (a recovery loop never ends a trial hanging)."""

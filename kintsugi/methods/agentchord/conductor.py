@@ -29,8 +29,8 @@ from rich.markup import escape
 from kintsugi.core.errors import ReasoningError
 from kintsugi.core.log import TrialLog
 from kintsugi.core.record import SkillLog
-from kintsugi.methods.agentchord.conducting import (ConductorConfig, ConductorError, Metrics, objects_of, proprioceptive,
-                                                    strict)
+from kintsugi.methods.agentchord.conducting import (ConductorConfig, ConductorError, Interrupted, Metrics, objects_of,
+                                                    proprioceptive, strict)
 from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes
 from kintsugi.methods.agentchord.observe import ARMS, features
 from kintsugi.methods.agentchord.pouring import Pouring
@@ -224,7 +224,10 @@ class Conductor(Recovering, Settling, Reaching, Pushing, Pouring):
                     continue
                 if action.name == "place" and self._holds_nothing(action.args.get("arm")):
                     continue
-                self._execute(edge, action.name, dict(action.args))
+                try:
+                    self._execute(edge, action.name, dict(action.args))
+                except Interrupted:  # the watch that stopped it (its firing, its loss) says what follows
+                    pass
                 if stop is not None and stop(action):
                     return None
                 if fired:
@@ -243,15 +246,16 @@ class Conductor(Recovering, Settling, Reaching, Pushing, Pouring):
         finally:
             if watch is not None:
                 observers.remove(watch)
-        self.verify_pour(edge)
+        try:
+            self.verify_pour(edge)
+        except Interrupted:  # a loss while a turn is topped up: the recovery's watch has it
+            pass
         return None
 
     def _already_open(self, arm: Any) -> bool:
         """The hand is commanded open (by an action of this conductor's, which waited for the fingers): opening
-        it again would only spend control steps (a recovery's release right after the settle, which has just
-        opened that hand). Whether a pad still touches something does not matter: an open hand lets go of what
-        it can (a bottle that fell upright against an open finger cost pour-single seed 3 a second opening, 9
-        steps more than rekep)."""
+        it again would only spend control steps (a recovery's release right after the settle). Whether a pad
+        still touches something does not matter: an open hand lets go of what it can."""
         if arm not in ARMS:
             return False
         return not self.robot.arm_state(arm).gripper_closed
@@ -330,6 +334,8 @@ class Conductor(Recovering, Settling, Reaching, Pushing, Pouring):
         tag = "[magenta]recovery[/magenta] " if edge.kind == "recovery" else ""
         self.log.say(f"[dim]{self.robot.sim_time:6.2f}s[/dim] {tag}{escape(edge.id)}: [bold]{escape(call['action'])}"
                      f"[/bold] -> {flag} ({escape(result.message)})", markup=True)
+        if getattr(result, "interrupted", False):
+            raise Interrupted(f"{edge.id} {name}: {result.message}")
         if not result.planned and unplanned_ok:
             return False
         if result.ik_failed:
@@ -369,9 +375,8 @@ class Conductor(Recovering, Settling, Reaching, Pushing, Pouring):
         return features(self.robot, objs, tops=self.tops.world)
 
     def _still_at_rest(self, names: set[str]) -> bool:
-        """The objects were read at rest and nothing has moved since (no control step): a recovery that let a
-        dropped bottle come to rest and merged straight into the goal waited for it a second time, three reads
-        (24 control steps) more than a re-planner that found the goal already held (pour-single seed 41)."""
+        """The objects were read at rest and nothing has moved since (no control step): a recovery that merges
+        straight into the goal does not wait for them a second time."""
         return self._rested is not None and self._rested[0] == self.robot_steps() and names <= self._rested[1]
 
     def goal_holds(self) -> bool:
