@@ -60,15 +60,28 @@ PALM_BACK_M = 0.035
 AXES = {"normal": 0, "closing": 1, "approach": 2}
 
 
+@dataclass(frozen=True)
+class InHand:
+    """An object as the hand took it: its bottom and centre relative to the tool, in the tool's frame, from the
+    perceived features the grasp was planned from. A place reads them when the held object is hidden in the
+    hand (a small capsule between the fingers shows the cameras a few points): the hand knows how it took it."""
+
+    obj: str
+    bottom: np.ndarray
+    centre: np.ndarray
+
+
 @dataclass
 class ArmView:
-    """What planning knows about one arm: its commanded joints and their tool pose, and touch."""
+    """What planning knows about one arm: its commanded joints and their tool pose, touch, and how the hand took
+    what it holds (`InHand`, when its last action was the grasp of it or a move since)."""
 
     q: np.ndarray
     pos: np.ndarray
     rot: np.ndarray
     base: np.ndarray
     touching: dict[str, int]
+    in_hand: InHand | None = None
 
 
 def side_rotation(yaw: float) -> np.ndarray:
@@ -110,6 +123,8 @@ class Planner:
         self.iks = iks
         self.shapes = shapes
         self.clipped = False
+        self.grasped: dict[str, InHand] = {}
+        """Per arm, how its last planned grasp takes its object (the robot keeps it once the grasp has run)."""
 
     # --- IK helpers -----------------------------------------------------------
     def _solve(self, arm: str, pos: np.ndarray, rot: np.ndarray, seed: np.ndarray, what: str) -> np.ndarray:
@@ -252,6 +267,7 @@ class Planner:
             c[2] = max(c[2], PAD_HALF[2] + TABLE_CLEARANCE_M)
             style = "top-down" + (" (fallen)" if shape.grasp == "side_if_upright" else "")
         approach = rot[:, 2]
+        self.grasped[a.arm] = InHand(a.obj, rot.T @ (np.array(f.extremes["bottom"]) - c), rot.T @ (self.centre(f) - c))
         pre = c - a.pre_grasp_offset * approach
         # Come down onto the pre-grasp pose from above the object, so the joint-space move
         # there never sweeps the fingers through it.
@@ -324,7 +340,11 @@ class Planner:
     def _place(self, a: A.Place, arm: ArmView, feats: dict) -> list[Step]:
         held = [k for k, n in arm.touching.items() if n == 2]
         table_z = 0.0
-        if held:
+        took = arm.in_hand if arm.in_hand is not None and held and arm.in_hand.obj == held[0] else None
+        if held and took is not None and not _seen(feats.get(held[0])):  # hidden in the hand: as it was taken
+            below = -float((arm.rot @ took.bottom)[2])
+            shift = -(arm.rot @ took.centre)[:2]
+        elif held:
             f = self._visible(held[0], feats.get(held[0]))
             below = arm.pos[2] - f.extremes["bottom"][2]  # tool centre point above the object's bottom
             shift = arm.pos[:2] - self.centre(f)[:2]
@@ -343,6 +363,10 @@ class Planner:
         retreat = self._linear_prefix(a.arm, (low, rot), (retreat_pos, rot), lower.waypoints[-1], "retreat")
         return [Move([q_over], tcp=(over, rot), label="over place"), lower, Grip(False, "release"),
                 *([retreat] if retreat is not None else [])]
+
+
+def _seen(f: ObjectFeatures | None) -> bool:
+    return f is not None and f.visible and f.centroid is not None
 
 
 def _line(start: tuple[np.ndarray, np.ndarray], goal: tuple[np.ndarray, np.ndarray]):  # noqa: ANN202

@@ -25,12 +25,14 @@ from kintsugi.worlds.tabletop.config import ARMS
 from kintsugi.worlds.tabletop.ik import ArmIK
 from kintsugi.worlds.tabletop.motion import planned_duration, run_programs
 from kintsugi.worlds.tabletop.perceive import ObjectPerception
-from kintsugi.worlds.tabletop.planning import ArmView, Planner, PlanError
+from kintsugi.worlds.tabletop.planning import ArmView, InHand, Planner, PlanError
 from kintsugi.worlds.tabletop.scene import CAMERAS
 from kintsugi.worlds.tabletop.world import TabletopWorld
 
 Vec3 = tuple[float, float, float]
 NEEDS_FEATURES = ("grasp", "move_to_obj", "place", "push")
+LETS_GO = ("open_gripper", "close_gripper", "place", "push")
+"""Actions after which the hand no longer holds what a grasp took, as it took it."""
 
 
 HELD_MIN_OPENING_M = 0.01
@@ -165,6 +167,9 @@ class TabletopRobot:
         self.features_source = self._perception.mode
         self.bases = {arm: np.array(base_position(cfg.robot, arm)) for arm in ARMS}
         self.cameras = CAMERAS
+        self._in_hand: dict[str, InHand] = {}
+        """Per arm, how the hand took what it holds (set by a grasp that ran, forgotten when the hand opens or
+        closes again): a place reads it when the held object is hidden in the hand."""
         self.step_observers: list[StepObserver] = []
         """Per-control-step observers (online monitors, trajectory loggers): each is called after every
         control step of every atomic action, in list order, all of them every step; any returning True
@@ -257,6 +262,12 @@ class TabletopRobot:
                         stopped[0] = True
             return stopped[0]
 
+        for p in parts:  # what each hand now holds, as it took it
+            took = self._planner.grasped.get(p.arm) if p.action == "grasp" else None
+            if took is not None or p.action in LETS_GO:
+                self._in_hand.pop(p.arm, None)
+            if took is not None:
+                self._in_hand[p.arm] = took
         reports = run_programs(self._world, programs, self._motion, self._on_tick, observe)
         if stopped[0]:
             return ActionResult(action=action.action, arms=arms, reached=False, clipped=self._planner.clipped,
@@ -276,4 +287,5 @@ class TabletopRobot:
     def _arm_view(self, arm: str) -> ArmView:
         q = self._world.joint_targets(arm)
         pos, rot = self._iks[arm].fk(q)
-        return ArmView(q=q, pos=pos, rot=rot, base=self.bases[arm], touching=self._world.pad_contacts(arm)[0])
+        return ArmView(q=q, pos=pos, rot=rot, base=self.bases[arm], touching=self._world.pad_contacts(arm)[0],
+                       in_hand=self._in_hand.get(arm))
