@@ -178,7 +178,7 @@ def embedded_arrange(request: ArrangerRequest) -> ArrangerReply:
     arms = reading.arms
     names = [o.name for o in request.objects if o.visible]
     places = _places(request, [a.name for a in request.arms], [o.name for o in request.objects])
-    where = place_table(places, request.domain, seen, dict(request.regions))
+    where = place_table(places, request.domain, seen, dict(request.regions), dict(request.region_sizes))
     ops = OpTable(instructed_ops(request.task, request.domain, arms, names, places, reading=reading))  # masks once
     wanted = set(request.failure_modes)
     facts = {n.id: _facts(request.node_facts[n.id], request) for n in graph.nodes}

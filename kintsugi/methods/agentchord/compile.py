@@ -52,6 +52,30 @@ def task_regions(spec: Any, cfg: Any) -> dict[str, tuple[float, float]]:
     return fixed
 
 
+def task_region_sizes(spec: Any, cfg: Any, domain: Any) -> dict[str, tuple[float, float]]:
+    """The half-extents the task statement gives its regions, by the place the goal names them with: a fixed
+    region by its name (and `target` when it is the only one), a region beside an object by the domain's place
+    at the same offset from it (`beside_left(plate)` for a region 18 cm left of the plate)."""
+    if cfg is None:
+        return {}
+    out: dict[str, tuple[float, float]] = {}
+    for n in getattr(spec, "targets", ()):
+        r = cfg.targets.get(n)
+        if r is None:
+            continue
+        half = (float(r.half_m[0]), float(r.half_m[1]))
+        if r.relative_to is None:
+            out[n] = half
+            continue
+        for place, offset in domain.relative_places.items():
+            if all(abs(float(a) - float(b)) < 1e-6 for a, b in zip(r.center_m, offset)):
+                out[f"{place}({r.relative_to})"] = half
+    named = [n for n in task_regions(spec, cfg) if n in out]
+    if len(named) == 1 and "target" not in out:  # the only fixed region is also "the target region"
+        out["target"] = out[named[0]]
+    return out
+
+
 def labelled(objects: list[SeenObject], spec: Any, cfg: Any) -> list[SeenObject]:
     """The perceived objects with the labels the task gives them (kind, colour: what a detector or a model
     looking at the images would name), so the instruction may name them so ("the brown box")."""
@@ -78,6 +102,7 @@ def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = T
     try:
         request = ComposerRequest(task=spec.instruction, goal=list(goal or []),
                                   objects=objects, arms=arms, regions=task_regions(spec, cfg),
+                                  region_sizes=task_region_sizes(spec, cfg, TABLETOP_DOMAIN),
                                   domain=TABLETOP_DOMAIN, images_png=dict(observation.images_png),
                                   first_objects=seen_objects(first.objects) if first is not None else [],
                                   first_images_png=dict(first.images_png) if first is not None else {})
@@ -91,7 +116,8 @@ def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = T
                         {"composer": t1 - t0, "arranger": 0.0})
     arrange = ArrangerRequest(task=spec.instruction, graph=composed.graph, node_facts=composed.node_facts,
                               edge_operators=composed.edge_operators, objects=objects, arms=arms,
-                              regions=task_regions(spec, cfg), goal=list(composed.goal),
+                              regions=task_regions(spec, cfg), region_sizes=task_region_sizes(spec, cfg, TABLETOP_DOMAIN),
+                              goal=list(composed.goal),
                               domain=TABLETOP_DOMAIN, images_png=dict(observation.images_png))
     result, arranged = ask_arrange(reasoner, arrange, nominal, vocab)
     t2 = time.perf_counter()

@@ -100,7 +100,7 @@ def embedded_compose(request: ComposerRequest) -> ComposerReply:
     goal_text = list(request.goal) or reading.goal
     names = [o.name for o in request.objects if o.visible]
     places = goal_places(goal_text, [a.name for a in request.arms], [o.name for o in request.objects])
-    where = place_table(places, domain, seen, dict(request.regions))
+    where = place_table(places, domain, seen, dict(request.regions), dict(request.region_sizes))
     initial = observed_facts(request, domain, places) | remembered_facts(request, domain)
     goal = parse_literals(goal_text, domain, where="goal")
     ops = instructed_ops(request.task, domain, reading.arms, names, places, reading=reading)

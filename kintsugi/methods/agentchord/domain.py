@@ -57,7 +57,8 @@ FLAT_MARGIN_M = 0.008
 """`flat` holds while the object's height exceeds its thinnest perceived span by no more than this (perception
 reads a lying fork's height to a few millimetres; one on its side is 2-3 cm taller)."""
 REGION_TOL_M = 0.04
-"""A sub-goal `in_region` holds when the perceived centroid is this close (x and y) to the region's centre."""
+"""A sub-goal `in_region` of a region the task gives no size holds when the perceived centroid is this close (x
+and y) to the region's centre; a stated size is checked less `RELATION_MARGIN_M` (never looser than the scorer)."""
 ON_MARGIN_M = 0.005
 """`on(x, y)`: x's centre this far inside y's perceived footprint..."""
 ON_GAP_M = (-0.01, 0.012)
@@ -66,6 +67,8 @@ RELATION_MARGIN_M = 0.005
 """Perception's error on one object's centre relative to another's, as the relation checks below read it:
 at most 1.8 mm over 48 can-to-box offsets (flank-box under `pose`, standing cans at rest, the box turned up
 to 15 degrees), rounded up."""
+UNSTATED_REGION_HALF_M = REGION_TOL_M + RELATION_MARGIN_M
+"""The half-extent of a region the task gives no size: checked within `REGION_TOL_M` of its centre."""
 SIDE_M = (0.06 + RELATION_MARGIN_M, 0.28 - RELATION_MARGIN_M)
 """`left_of` / `right_of`: x's centre this far to the side (world y) of y's centre...
 
@@ -141,9 +144,9 @@ PREDICATES = [
     _p("direction", ["place"], "the place is a direction a heading goal may name (static)", static=True),
     _p("over_place", ["object", "place"], "the held object is carried above the region"),
     _p("in_region", ["object", "place"], "the object's centre lies in the region",
-       [{"kind": "in_region", "point": {"entity": "?1"}, "lo": [f"$rx(?2, -{REGION_TOL_M})", f"$ry(?2, -{REGION_TOL_M})",
-                                                                -1.0],
-         "hi": [f"$rx(?2, {REGION_TOL_M})", f"$ry(?2, {REGION_TOL_M})", 2.0]}]),
+       [{"kind": "in_region", "point": {"entity": "?1"},
+         "lo": [f"$rxlo(?2, {RELATION_MARGIN_M})", f"$rylo(?2, {RELATION_MARGIN_M})", -1.0],
+         "hi": [f"$rxhi(?2, {RELATION_MARGIN_M})", f"$ryhi(?2, {RELATION_MARGIN_M})", 2.0]}]),
     _p("heading", ["object", "place"], "the lying object's head points in the direction",
        [{"kind": "heading", "object": "?1", "yaw_deg": "$yaw(?2)", "tol_deg": HEADING_TOL_DEG}]),
     _p("handed_over", ["object", "arm", "arm"], "the first arm held the object, then the second took it (history)"),

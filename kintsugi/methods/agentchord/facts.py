@@ -93,7 +93,8 @@ def checked_facts(request: Any, domain: Domain, places: list[str] = ()) -> set[A
     seen = {o.name: o for o in request.objects if o.visible and o.centroid is not None}
     regions = [p for p in places if p not in domain.directions]
     try:
-        where = place_table(regions, domain, {o.name: o for o in request.objects}, dict(getattr(request, "regions", {})))
+        where = place_table(regions, domain, {o.name: o for o in request.objects}, dict(getattr(request, "regions", {})),
+                            dict(getattr(request, "region_sizes", {})))
     except PlanningError:
         where = {}
     pools = {"object": list(seen), "place": [p for p in regions if p in where]}
@@ -208,12 +209,17 @@ def place_xy(place: str, domain: Domain, seen: dict[str, SeenObject], regions: d
                         f"one of {', '.join(f'{k}(object)' for k in domain.relative_places) or 'no place functions'}")
 
 
-def place_table(places: list[str], domain: Domain, seen: dict[str, SeenObject], regions: dict) -> dict:
-    """place -> region centre (x, y); ("direction", d) -> yaw for the directions."""
+def place_table(places: list[str], domain: Domain, seen: dict[str, SeenObject], regions: dict,
+                sizes: dict | None = None) -> dict:
+    """place -> region centre (x, y); ("half", place) -> its half-extents (x, y): the task statement's
+    (`sizes`), else `UNSTATED_REGION_HALF_M`; ("direction", d) -> yaw for the directions."""
+    from kintsugi.methods.agentchord.domain import UNSTATED_REGION_HALF_M
+
     out: dict = {}
     for p in places:
         if p in domain.directions:
             out[("direction", p)] = domain.directions[p]
         else:
             out[p] = place_xy(p, domain, seen, regions)
+            out[("half", p)] = tuple(float(v) for v in (sizes or {}).get(p, (UNSTATED_REGION_HALF_M,) * 2))
     return out

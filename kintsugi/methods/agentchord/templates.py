@@ -7,10 +7,11 @@ import re
 from typing import Any
 
 from kintsugi.methods.agentchord.angles import head_yaw_deg, wrap_deg
+from kintsugi.methods.agentchord.domain import UNSTATED_REGION_HALF_M
 from kintsugi.methods.agentchord.symbolic import Atom, GroundOp, PlanningError
 from kintsugi.methods.agentchord.types import Domain, SeenObject
 
-_FN = re.compile(r"^\$(x|y|z|top|hy|nhy|rx|ry|yaw|mirror|thin)\(\s*(\?[A-Za-z0-9_]+)\s*(?:,\s*(-?[0-9.eE+-]+)\s*)?\)$")
+_FN = re.compile(r"^\$(x|y|z|top|hy|nhy|rx|ry|rxlo|rxhi|rylo|ryhi|yaw|mirror|thin)\(\s*(\?[A-Za-z0-9_]+)\s*(?:,\s*(-?[0-9.eE+-]+)\s*)?\)$")
 _PLACE_FN = re.compile(r"([A-Za-z][A-Za-z0-9_]*)\(([A-Za-z][A-Za-z0-9_]*)\)")
 _FN2 = re.compile(r"^\$(dx|dy|turn)\(\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*,\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*\)$")
 
@@ -18,7 +19,8 @@ _FN2 = re.compile(r"^\$(dx|dy|turn)\(\s*(\?[A-Za-z][A-Za-z0-9_]*)\s*,\s*(\?[A-Za
 def fill(value: Any, binding: dict[str, str], seen: dict[str, SeenObject], where: Any = None) -> Any:
     """Instantiate a template: `?p` -> its value, `$x(?obj[, d])` -> the object's perceived centroid x (y, z)
     plus d, `$hy(?obj, d)` / `$nhy` -> +/- (half its perceived y extent + d), `$rx(?place)` / `$ry` -> the
-    region's centre, `$dx(?obj, ?place)` / `$dy` -> region centre minus the object's centroid, `$turn(?obj,
+    region's centre, `$rxlo(?place, m)` / `$rxhi` / `$rylo` / `$ryhi` -> its low / high bound along x / y (its
+    centre -/+ its half-extent) moved inwards by m, `$dx(?obj, ?place)` / `$dy` -> region centre minus the object's centroid, `$turn(?obj,
     ?dir)` -> the turn about the vertical bringing the object's head to the direction, `$top(?obj, d)` -> its
     perceived top's height plus d (no lower than 0), `$yaw(?dir)` -> the
     direction's yaw (degrees), `$thin(?obj, d)` -> its thinnest perceived span plus d, `$mirror(?arm, v)` -> v
@@ -49,6 +51,11 @@ def fill(value: Any, binding: dict[str, str], seen: dict[str, SeenObject], where
     d = float(num) if num is not None else 0.0
     if fn in ("rx", "ry"):
         return round(_where(value, arg, where or {})["xy".index(fn[1])] + d, 4)
+    if fn in ("rxlo", "rxhi", "rylo", "ryhi"):
+        i, sign = "xy".index(fn[1]), (-1.0 if fn.endswith("lo") else 1.0)
+        centre = _where(value, arg, where or {})
+        half = (where or {}).get(("half", arg)) or (UNSTATED_REGION_HALF_M,) * 2  # no size stated
+        return round(centre[i] + sign * (float(half[i]) - d), 4)
     if fn == "yaw":
         psi = (where or {}).get(("direction", arg))
         if psi is None:

@@ -165,6 +165,10 @@ class ComposerRequest(StrictModel):
     """Named fixed regions of the task statement (centre x, y in metres: where the painted region is), for
     goals such as `in_region(block, target)`; regions relative to an object (`beside_left(plate)`) are
     computed from its perceived centroid instead."""
+    region_sizes: dict[str, tuple[float, float]] = Field(default_factory=dict, max_length=16)
+    """The half-extents (x, y, metres) the task statement gives its regions, by place (`target`,
+    `beside_right(plate)`): an `in_region` check holds inside them less perception's margin. A region with
+    none stated is checked within the domain's default."""
     images_png: dict[str, bytes] = Field(default_factory=dict, repr=False)
     first_objects: list[SeenObject] = Field(default_factory=list, max_length=32)
     """Re-planning mid-task: the objects as perceived in the task's first observation (empty on the first plan).
@@ -206,6 +210,8 @@ class ArrangerRequest(StrictModel):
     domain: Domain
     regions: dict[str, tuple[float, float]] = Field(default_factory=dict, max_length=16)
     """As in ComposerRequest: the task statement's named fixed regions."""
+    region_sizes: dict[str, tuple[float, float]] = Field(default_factory=dict, max_length=16)
+    """As in ComposerRequest: the half-extents the task statement gives its regions."""
     goal: list[Literal_] = Field(default_factory=list, max_length=32)
     """As in ComposerRequest: what a recovery may count as reached (`not dropped(x)`: a fall is never a place)."""
     failure_modes: list[str] = Field(default_factory=lambda: list(FAILURE_MODES))

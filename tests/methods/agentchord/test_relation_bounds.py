@@ -72,3 +72,33 @@ def test_the_perceived_on_table_check_accepts_only_bottoms_the_scorer_accepts_be
         assert holds(z)
     for z in (-(tol + 0.001), -(tol - 0.99 * m), tol - 0.99 * m, tol + 0.001, 0.02):
         assert not holds(z)
+
+
+@pytest.mark.parametrize("task", ["rearrange-table", "coffee-tray", "handover-block"])
+def test_in_region_is_the_task_statements_region_shrunk_by_the_perception_margin(task: str) -> None:
+    """Each region the task states is checked inside its own half-extents less the margin, so a centre the
+    method reads inside it lies inside the scorer's region too (a fixed 4 cm would let a spoon 3.3 cm off a
+    2.5 cm region count as placed)."""
+    from types import SimpleNamespace
+
+    from kintsugi.core.plugins import load_builtins
+    from kintsugi.core.registry import TASKS
+    from kintsugi.methods.agentchord.compile import task_region_sizes
+    from kintsugi.methods.agentchord.facts import place_table
+    from kintsugi.methods.agentchord.templates import node_constraints
+
+    load_builtins()
+    t = TASKS.get(task).factory()
+    cfg = t.config({})
+    sizes = task_region_sizes(t.spec, cfg, domain.TABLETOP_DOMAIN)
+    assert sizes, f"{task} states regions"
+    plate = SimpleNamespace(centroid=(0.45, 0.0, 0.01))
+    for place, half in sizes.items():
+        declared = [r for n, r in cfg.targets.items() if n in t.spec.targets and tuple(r.half_m) == half]
+        assert declared, (place, half)
+        where = place_table([place], domain.TABLETOP_DOMAIN, {"plate": plate}, {place: (0.4, -0.25)}, sizes)
+        (c,), _ = node_constraints(domain.TABLETOP_DOMAIN, [("in_region", "x", place)], {}, where)
+        centre = where[place]
+        for i in (0, 1):
+            assert c["hi"][i] - centre[i] == pytest.approx(half[i] - domain.RELATION_MARGIN_M)
+            assert centre[i] - c["lo"][i] == pytest.approx(half[i] - domain.RELATION_MARGIN_M)
