@@ -31,6 +31,7 @@ from kintsugi.core.log import TrialLog
 from kintsugi.core.record import SkillLog
 from kintsugi.methods.agentchord.conducting import (ConductorConfig, ConductorError, Interrupted, Metrics, objects_of,
                                                     proprioceptive, strict)
+from kintsugi.methods.agentchord.handing import Handing
 from kintsugi.methods.agentchord.keyframes import KeyframeError, TabletopKeyframes
 from kintsugi.methods.agentchord.observe import ARMS, features
 from kintsugi.methods.agentchord.pouring import Pouring
@@ -49,13 +50,13 @@ from kintsugi.taskgraph.monitor import Firing, MonitorBank
 
 
 MERGE_FAILS = 2
-"""A recovery whose merge check fails this many times on one edge falls back to re-planning..."""
+"""A recovery whose merge check fails this many times on one edge falls back to re-planning, as does one run
+MAX_RERUNS times (each run disturbed again: a grasp closing on nothing, a loss)."""
 MAX_RERUNS = 4
-"""...as does one run this many times (each run disturbed again: a grasp closing on nothing, a loss)."""
 REPLANNED = object()
 
 
-class Conductor(Recovering, Settling, Reaching, Pushing, Pouring):
+class Conductor(Recovering, Settling, Reaching, Pushing, Pouring, Handing):
     """Runs one compiled graph to its goal: nominal edges under their monitors, recoveries (`Recovering`) after
     a firing, settles (`Settling`) before a recovery or the goal check reads the scene."""
 
@@ -311,6 +312,7 @@ class Conductor(Recovering, Settling, Reaching, Pushing, Pouring):
             self.metrics.recovery_latency_steps.append(self.robot_steps() - self.metrics.fired_at)
             self.metrics.fired_at = None
         self.tops.before_grasp(call, self.robot.features)  # a knocked object's top, read again
+        self.witness_release(call)
         result = self.robot.execute(call)
         if getattr(result, "unseen", False) and not unplanned_ok:
             result = self._look_again(call, result)
@@ -375,8 +377,7 @@ class Conductor(Recovering, Settling, Reaching, Pushing, Pouring):
         return features(self.robot, objs, tops=self.tops.world)
 
     def _still_at_rest(self, names: set[str]) -> bool:
-        """The objects were read at rest and nothing has moved since (no control step): a recovery that merges
-        straight into the goal does not wait for them a second time."""
+        """The objects were read at rest and nothing has moved since (a merge into the goal need not wait again)."""
         return self._rested is not None and self._rested[0] == self.robot_steps() and names <= self._rested[1]
 
     def goal_holds(self) -> bool:
@@ -396,4 +397,4 @@ class Conductor(Recovering, Settling, Reaching, Pushing, Pouring):
         if bad or unknown:
             self.log.event(self.robot.sim_time, "goal check", f"goal {goal.id!r}: violated {', '.join(bad) or '-'}; "
                            f"undecided {', '.join(unknown) or '-'}")
-        return not bad and not unknown and self.pours_done()  # undecided is not a success
+        return not bad and not unknown and self.pours_done() and self.handovers_done()  # undecided is no success

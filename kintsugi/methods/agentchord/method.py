@@ -108,6 +108,7 @@ class AgentChord:
                                   ConductorConfig(**self.config.model_dump(include=set(ConductorConfig.model_fields))),
                                   seen=first.objects)
             conductor.replan = self._replanner(reasoner, conductor, robot, first, list(compiled.composer.goal))
+            conductor.handover_goals = handed_objects(compiled.composer.goal)
             conductor.tops.observe(first.objects)
             conductor.heads.seed(first.objects)
             try:
@@ -136,7 +137,9 @@ class AgentChord:
 
         def replan() -> Any:
             done = {f"poured({o}, {c})" for (o, c), ok in conductor.pours.items() if ok}
-            goal = [g for g in read if g.replace(" ", "") not in {d.replace(" ", "") for d in done}]
+            handed = conductor.seen_handovers()
+            goal = [g for g in read if g.replace(" ", "") not in {d.replace(" ", "") for d in done}
+                    and not handed_objects([g]) & handed]
             obs = robot.observation(images=reasoner.sees_images)
             try:
                 compiled = compile_graph(reasoner, self.ctx.task, obs, arranger=self.arranger,
@@ -213,3 +216,9 @@ def make_rekep(ctx: Any, settings: BacktrackSettings) -> AgentChord:
 
 
 __all__ = ["AgentChord", "AgentChordMetrics", "KeyframeError", "KintsugiError", "metrics_of"]
+
+
+def handed_objects(goal: Any) -> frozenset[str]:
+    """The objects a goal's `handed_over(obj, giver, taker)` literals hand over."""
+    return frozenset(g.split("(", 1)[1].split(",")[0].strip() for g in goal
+                     if g.replace(" ", "").startswith("handed_over("))
