@@ -1,7 +1,8 @@
 """Task `rearrange-table`: put the fork left of the plate and the spoon right of it (paper, appendix B).
 
 The two regions (`targets.fork`, `targets.spoon`) ride with the plate. Success: each utensil's
-centre lies in its region, it lies flat on the table, its handle runs along the plate's side
+centre lies in its region, it lies flat on the table (either face up: its slabs are the same turned over,
+and the instruction asks for flat), its handle runs along the plate's side
 (world x, within `scoring.align_tol_deg`) with its head pointing away from the robot (+x),
 it is at rest and released.
 """
@@ -98,7 +99,7 @@ class RearrangeScorer:
                 in_region=in_region(self.cfg, obj, truth, obj),
                 offset_m=tuple(round(float(v), 4) for v in np.array(truth.objects[obj].pos[:2])
                                - region_center(self.cfg, obj, truth)),
-                flat=rest_level(truth, obj, shape_of(obj, self.cfg.objects).rest_height, sc.upright_tol_deg),
+                flat=rest_level(truth, obj, (sh := shape_of(obj, self.cfg.objects)).rest_height, sc.upright_tol_deg, shape=sh),
                 heading_err_deg=round(heading, 3), at_rest=at_rest(truth, obj, sc.rest_speed_m_s),
                 released=not held(truth, obj))
         details = RearrangeDetails(**states)

@@ -107,6 +107,8 @@ def in_region(cfg: TabletopConfig, name: str, truth: GroundTruth, obj: str) -> b
     return bool(np.all(d <= np.array(cfg.targets[name].half_m)))
 
 
-def rest_level(truth: GroundTruth, obj: str, rest_height: float, tol_deg: float, tol_m: float = 0.005) -> bool:
-    """Lying the right way up on the table: the body's z axis up and its centre at its rest height."""
-    return upright(truth, obj, tol_deg) and on_table(truth, obj, rest_height, tol_m)
+def rest_level(truth: GroundTruth, obj: str, rest_height: float, tol_deg: float, tol_m: float = 0.005,
+               shape: "Shape | None" = None) -> bool:
+    """Lying flat on the table: the body's z axis up and its centre at its rest height. With its `shape` given, a
+    shape that is the same turned over (a utensil made of flat slabs) lies flat on either face."""
+    return upright(truth, obj, tol_deg, shape) and on_table(truth, obj, rest_height, tol_m)
