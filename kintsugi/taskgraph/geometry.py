@@ -36,12 +36,22 @@ def vector_feature(obj: object, name: str):
     return v
 
 
+def centre(obj: object):
+    """The middle of the object's perceived axis ends, else its centroid (None when it has neither)."""
+    a, b = vector_feature(obj, "axis_neg"), vector_feature(obj, "axis_pos")
+    if a is None or b is None:
+        return vector_feature(obj, "centroid")
+    return tuple((float(a[i]) + float(b[i])) / 2.0 for i in range(3))
+
+
 class Point(GraphModel):
     """A 3-D point read from the features, plus a world-frame offset.
 
-    Object: a vector feature (default `centroid`; extremes such as `top` by name), or with
-    `along` the point that fraction of the way from `axis_neg` (0) to `axis_pos` (1), e.g.
-    0.75 up a bottle. Arm: its end effector (`eef`, the only arm point).
+    Object: a vector feature (default `centroid`; extremes such as `top` by name; `centre`: the
+    middle of its perceived axis ends, where it has them, else its centroid: an unfitted cloud's
+    mean drifts by centimetres towards a wide end, a fork's head), or with `along` the point that
+    fraction of the way from `axis_neg` (0) to `axis_pos` (1), e.g. 0.75 up a bottle. Arm: its end
+    effector (`eef`, the only arm point).
     """
 
     entity: Name
@@ -63,7 +73,9 @@ class Point(GraphModel):
             obj = f.objects.get(self.entity)
             if obj is None:
                 return None
-            if self.along is None:
+            if self.feature == "centre":
+                v = centre(obj)
+            elif self.along is None:
                 v = vector_feature(obj, self.feature or "centroid")
             else:
                 a, b = vector_feature(obj, "axis_neg"), vector_feature(obj, "axis_pos")

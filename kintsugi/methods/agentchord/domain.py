@@ -144,7 +144,7 @@ PREDICATES = [
     _p("direction", ["place"], "the place is a direction a heading goal may name (static)", static=True),
     _p("over_place", ["object", "place"], "the held object is carried above the region"),
     _p("in_region", ["object", "place"], "the object's centre lies in the region",
-       [{"kind": "in_region", "point": {"entity": "?1"},
+       [{"kind": "in_region", "point": {"entity": "?1", "feature": "centre"},
          "lo": [f"$rxlo(?2, {RELATION_MARGIN_M})", f"$rylo(?2, {RELATION_MARGIN_M})", -1.0],
          "hi": [f"$rxhi(?2, {RELATION_MARGIN_M})", f"$ryhi(?2, {RELATION_MARGIN_M})", 2.0]}]),
     _p("heading", ["object", "place"], "the lying object's head points in the direction",

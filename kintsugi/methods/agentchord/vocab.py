@@ -8,9 +8,10 @@ from typing import Any, Callable, Sequence
 
 from kintsugi.taskgraph.vocabulary import Vocabulary
 
-FEATURES = frozenset({"centroid", "axis", "n_points", "extent", "top", "bottom", "axis_pos", "axis_neg", "opening",
-                      "cap"})
-"""ObjectFeatures' vectors: centroid, axis, spans (`extent`) and the extremes perception reports."""
+FEATURES = frozenset({"centroid", "centre", "axis", "n_points", "extent", "top", "bottom", "axis_pos", "axis_neg",
+                      "opening", "cap"})
+"""ObjectFeatures' vectors: centroid, axis, spans (`extent`) and the extremes perception reports; `centre`, the
+middle of the axis ends (a point constraint's reading of where an object is)."""
 
 
 def _checker(name: str, objects: Sequence[str]) -> Callable[[dict[str, Any]], None]:

@@ -102,3 +102,28 @@ def test_in_region_is_the_task_statements_region_shrunk_by_the_perception_margin
         for i in (0, 1):
             assert c["hi"][i] - centre[i] == pytest.approx(half[i] - domain.RELATION_MARGIN_M)
             assert centre[i] - c["lo"][i] == pytest.approx(half[i] - domain.RELATION_MARGIN_M)
+
+
+def test_in_region_reads_where_the_object_is_not_where_its_cloud_leans() -> None:
+    """An unfitted cloud's mean leans towards a wide end (a fork's head: about 2 cm); the check reads the middle
+    of the perceived axis ends, so a fork 5.7 cm off a region whose bound is 3.5 cm is out even though its
+    cloud's mean is 3.3 cm off."""
+    from types import SimpleNamespace
+
+    from kintsugi.methods.agentchord.facts import place_table
+    from kintsugi.methods.agentchord.templates import node_constraints
+    from kintsugi.taskgraph.constraints import InRegion
+    from kintsugi.taskgraph.features import Features
+
+    where = place_table(["target"], domain.TABLETOP_DOMAIN, {}, {"target": (0.5, 0.2)}, {"target": (0.04, 0.025)})
+    (c,), _ = node_constraints(domain.TABLETOP_DOMAIN, [("in_region", "fork", "target")], {}, where)
+    check = InRegion.model_validate(c)
+
+    def fork(middle_x: float, lean: float) -> SimpleNamespace:
+        ends = {"axis_pos": (middle_x + 0.06, 0.2, 0.004), "axis_neg": (middle_x - 0.06, 0.2, 0.004)}
+        return SimpleNamespace(centroid=(middle_x + lean, 0.2, 0.004), visible=True, extremes=ends, axis=None)
+
+    assert check.evaluate(Features(objects={"fork": fork(0.5 - 0.057, 0.024)})) > 0.0
+    assert check.evaluate(Features(objects={"fork": fork(0.5 - 0.02, 0.024)})) <= 0.0
+    no_axis = SimpleNamespace(centroid=(0.5, 0.2, 0.004), visible=True, extremes={}, axis=None)
+    assert check.evaluate(Features(objects={"fork": no_axis})) <= 0.0  # no axis ends: its centroid
