@@ -254,9 +254,8 @@ class Conductor(Recovering, Settling, Reaching, Pushing, Pouring, Handing):
         return None
 
     def _already_open(self, arm: Any) -> bool:
-        """The hand is commanded open (by an action of this conductor's, which waited for the fingers): opening
-        it again would only spend control steps (a recovery's release right after the settle). Whether a pad
-        still touches something does not matter: an open hand lets go of what it can."""
+        """The hand is commanded open (by this conductor, which waited for the fingers): opening it again only
+        spends control steps. A pad still touching something does not matter: an open hand lets go of what it can."""
         if arm not in ARMS:
             return False
         return not self.robot.arm_state(arm).gripper_closed
@@ -383,7 +382,8 @@ class Conductor(Recovering, Settling, Reaching, Pushing, Pouring, Handing):
     def goal_holds(self) -> bool:
         goal = self.graph.node(self.graph.goal)
         names = self.goal_objects
-        idle = [a for a, state in goal.gripper.items() if state == "open"]
+        idle = ([a for a, state in goal.gripper.items() if state == "open"]  # else any open hand (a place's)
+                or [a for a in ARMS if not self.robot.arm_state(a).gripper_closed])
         if idle and not self._still_at_rest(names):  # judge the scene at rest (a placed object may still rock)
             last = next(e for e in self.graph.edges if e.target == goal.id and e.kind == "nominal")
             if not self.wait_still(idle[0], names, last):
