@@ -37,9 +37,10 @@ def vector_feature(obj: object, name: str):
 
 
 def centre(obj: object):
-    """The middle of the object's perceived axis ends, else its centroid (None when it has neither)."""
+    """Where the object is: for an unfitted cloud (`fit == "raw"`, whose mean leans towards a wide end) the middle
+    of its perceived axis ends, else its centroid (a fitted shape's centre holds where hands hide part of it)."""
     a, b = vector_feature(obj, "axis_neg"), vector_feature(obj, "axis_pos")
-    if a is None or b is None:
+    if getattr(obj, "fit", None) != "raw" or a is None or b is None:
         return vector_feature(obj, "centroid")
     return tuple((float(a[i]) + float(b[i])) / 2.0 for i in range(3))
 
@@ -47,8 +48,8 @@ def centre(obj: object):
 class Point(GraphModel):
     """A 3-D point read from the features, plus a world-frame offset.
 
-    Object: a vector feature (default `centroid`; extremes such as `top` by name; `centre`: the
-    middle of its perceived axis ends, where it has them, else its centroid: an unfitted cloud's
+    Object: a vector feature (default `centroid`; extremes such as `top` by name; `centre`: for an
+    unfitted cloud the middle of its perceived axis ends, else its centroid: an unfitted cloud's
     mean drifts by centimetres towards a wide end, a fork's head), or with `along` the point that
     fraction of the way from `axis_neg` (0) to `axis_pos` (1), e.g. 0.75 up a bottle. Arm: its end
     effector (`eef`, the only arm point).

@@ -50,10 +50,13 @@ class AxisFree:
     axis: None = None
     extent: Any = None
     """Its perceived spans (a cube's footprint, for `within` and `on`)."""
+    fit: str | None = None
+    """How perception described it (`raw`: an unfitted cloud, whose `centre` a point reads from its axis ends)."""
 
 
 def monitored(f: Any) -> Any:
-    return AxisFree(f.centroid, f.n_points, f.extremes, None, getattr(f, "extent", None)) if f.upright is None else f
+    return (AxisFree(f.centroid, f.n_points, f.extremes, None, getattr(f, "extent", None), getattr(f, "fit", None))
+            if f.upright is None else f)
 
 
 def with_tracked_top(f: Any, top: Any) -> Any:

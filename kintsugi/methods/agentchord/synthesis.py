@@ -15,6 +15,8 @@ from kintsugi.methods.agentchord.tops import Heads, Tops
 from kintsugi.taskgraph.model import Edge, TaskGraph
 from kintsugi.worlds.tabletop.clearance import across, gap
 
+WHERE = (None, "centre")
+"""The point features that say where an object is (its centroid, its centre)."""
 GRASP_Z_MIN_M = 0.029
 """A top-down grasp point is no lower than this (the pads' half length plus the table clearance)."""
 UPRIGHT_SWINGS_DEG = (0.0, 30.0, -30.0, 60.0, -60.0, 90.0, -90.0)
@@ -349,7 +351,7 @@ class EdgeSynthesis:
         """The centre (x, y) of a region some sub-goal puts the object's centroid in."""
         for n in self.graph.nodes:
             for c in n.constraints:
-                if (c.kind == "in_region" and c.point.entity == obj and c.point.feature is None
+                if (c.kind == "in_region" and c.point.entity == obj and c.point.feature in WHERE
                         and c.hi[0] - c.lo[0] < 1.0):
                     return region_centre(c)
         return None
@@ -384,7 +386,7 @@ class EdgeSynthesis:
             now = set(self.robot.arm_state(arm).held)
             held = now if held is None else held & now
         for c in self.graph.node(edge.target).constraints:
-            if c.kind != "in_region" or c.point.feature is not None or c.point.along is not None:
+            if c.kind != "in_region" or c.point.feature not in WHERE or c.point.along is not None:
                 continue
             if c.point.entity in (held or set()):
                 x, y = region_centre(c)

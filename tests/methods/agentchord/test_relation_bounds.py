@@ -121,9 +121,13 @@ def test_in_region_reads_where_the_object_is_not_where_its_cloud_leans() -> None
 
     def fork(middle_x: float, lean: float) -> SimpleNamespace:
         ends = {"axis_pos": (middle_x + 0.06, 0.2, 0.004), "axis_neg": (middle_x - 0.06, 0.2, 0.004)}
-        return SimpleNamespace(centroid=(middle_x + lean, 0.2, 0.004), visible=True, extremes=ends, axis=None)
+        return SimpleNamespace(centroid=(middle_x + lean, 0.2, 0.004), visible=True, extremes=ends, axis=None,
+                               fit="raw")
 
     assert check.evaluate(Features(objects={"fork": fork(0.5 - 0.057, 0.024)})) > 0.0
     assert check.evaluate(Features(objects={"fork": fork(0.5 - 0.02, 0.024)})) <= 0.0
-    no_axis = SimpleNamespace(centroid=(0.5, 0.2, 0.004), visible=True, extremes={}, axis=None)
+    no_axis = SimpleNamespace(centroid=(0.5, 0.2, 0.004), visible=True, extremes={}, axis=None, fit="raw")
     assert check.evaluate(Features(objects={"fork": no_axis})) <= 0.0  # no axis ends: its centroid
+    fitted = fork(0.5 - 0.057, 0.057)  # a fitted shape: its centroid, whatever its ends (hands may hide one)
+    fitted.fit = "primitive"
+    assert check.evaluate(Features(objects={"fork": fitted})) <= 0.0
