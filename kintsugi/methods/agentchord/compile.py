@@ -98,11 +98,11 @@ def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = T
     constraints that must persist along each edge (detect-only), no recovery branches."""
     vocab = tabletop_vocabulary(spec.objects)
     objects, arms = labelled(seen_objects(observation.objects), spec, cfg), seen_arms(observation.arms)
+    regions, sizes = task_regions(spec, cfg), task_region_sizes(spec, cfg, TABLETOP_DOMAIN)
     t0 = time.perf_counter()
     try:
         request = ComposerRequest(task=spec.instruction, goal=list(goal or []),
-                                  objects=objects, arms=arms, regions=task_regions(spec, cfg),
-                                  region_sizes=task_region_sizes(spec, cfg, TABLETOP_DOMAIN),
+                                  objects=objects, arms=arms, regions=regions, region_sizes=sizes,
                                   domain=TABLETOP_DOMAIN, images_png=dict(observation.images_png),
                                   first_objects=seen_objects(first.objects) if first is not None else [],
                                   first_images_png=dict(first.images_png) if first is not None else {})
@@ -116,8 +116,7 @@ def compile_graph(reasoner: Any, spec: Any, observation: Any, arranger: bool = T
                         {"composer": t1 - t0, "arranger": 0.0})
     arrange = ArrangerRequest(task=spec.instruction, graph=composed.graph, node_facts=composed.node_facts,
                               edge_operators=composed.edge_operators, objects=objects, arms=arms,
-                              regions=task_regions(spec, cfg), region_sizes=task_region_sizes(spec, cfg, TABLETOP_DOMAIN),
-                              goal=list(composed.goal),
+                              regions=regions, region_sizes=sizes, goal=list(composed.goal),
                               domain=TABLETOP_DOMAIN, images_png=dict(observation.images_png))
     result, arranged = ask_arrange(reasoner, arrange, nominal, vocab)
     t2 = time.perf_counter()

@@ -220,5 +220,7 @@ __all__ = ["AgentChord", "AgentChordMetrics", "KeyframeError", "KintsugiError", 
 
 def handed_objects(goal: Any) -> frozenset[str]:
     """The objects a goal's `handed_over(obj, giver, taker)` literals hand over."""
-    return frozenset(g.split("(", 1)[1].split(",")[0].strip() for g in goal
-                     if g.replace(" ", "").startswith("handed_over("))
+    from kintsugi.methods.agentchord.domain import TABLETOP_DOMAIN
+    from kintsugi.methods.agentchord.symbolic import parse_literals
+
+    return frozenset(a[1] for a in parse_literals(list(goal), TABLETOP_DOMAIN)[0] if a[0] == "handed_over")

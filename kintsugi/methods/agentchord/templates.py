@@ -20,9 +20,9 @@ def fill(value: Any, binding: dict[str, str], seen: dict[str, SeenObject], where
     """Instantiate a template: `?p` -> its value, `$x(?obj[, d])` -> the object's perceived centroid x (y, z)
     plus d, `$hy(?obj, d)` / `$nhy` -> +/- (half its perceived y extent + d), `$rx(?place)` / `$ry` -> the
     region's centre, `$rxlo(?place, m)` / `$rxhi` / `$rylo` / `$ryhi` -> its low / high bound along x / y (its
-    centre -/+ its half-extent) moved inwards by m, `$dx(?obj, ?place)` / `$dy` -> region centre minus the object's centroid, `$turn(?obj,
-    ?dir)` -> the turn about the vertical bringing the object's head to the direction, `$top(?obj, d)` -> its
-    perceived top's height plus d (no lower than 0), `$yaw(?dir)` -> the
+    centre -/+ its half-extent) moved inwards by m, `$dx(?obj, ?place)` / `$dy` -> region centre minus the
+    object's centroid, `$turn(?obj, ?dir)` -> the turn about the vertical bringing the object's head to the
+    direction, `$top(?obj, d)` -> its perceived top's height plus d (no lower than 0), `$yaw(?dir)` -> the
     direction's yaw (degrees), `$thin(?obj, d)` -> its thinnest perceived span plus d, `$mirror(?arm, v)` -> v
     for the right arm, -v for the left; lists and dicts
     recursively. `where`: place -> (x, y)."""
